@@ -1,0 +1,3 @@
+from motion2robot.cli import run
+
+run()

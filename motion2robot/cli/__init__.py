@@ -1,0 +1,78 @@
+"""The ``motion2robot`` command line.
+
+Each subcommand lives in its own module ``motion2robot/cli/cmd_<name>.py`` exposing
+``register(subparsers) -> None``; the module adds its parser and sets ``func=handler`` with
+``handler(args) -> int``. This module finds them, runs the chosen one, and owns the error
+convention: a :class:`~motion2robot.errors.UserError` becomes one line on stderr and exit code 2
+(traceback only with ``--debug``); Ctrl-C exits 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+import traceback
+
+from motion2robot import __version__
+from motion2robot.errors import UserError
+
+#: Order in which subcommands appear in ``--help`` (others follow alphabetically).
+_ORDER = ["demo", "robots", "inspect", "retarget", "check", "sim", "stream", "servos", "batch", "batch-report"]
+
+
+def _command_modules() -> list[str]:
+    names = [m.name for m in pkgutil.iter_modules(__path__) if m.name.startswith("cmd_")]
+    key = {n: i for i, n in enumerate(_ORDER)}
+    return sorted(names, key=lambda n: (key.get(n[4:].replace("_", "-"), len(key)), n))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="motion2robot",
+        description=(
+            "Turn generated human motion (HumanML3D, MDM, BVH, tensors) into humanoid robot motion: "
+            "retarget with casadi IK, check feasibility in MuJoCo, stream to Dynamixel servos."
+        ),
+        epilog="Run 'motion2robot COMMAND --help' for a command's options.",
+    )
+    parser.add_argument("--version", action="version", version=f"motion2robot {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show full tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in _command_modules():
+        importlib.import_module(f"{__name__}.{name}").register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the process exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2 if args.command is None and argv else 0
+        return int(args.func(args) or 0)
+    except UserError as err:
+        if debug:
+            traceback.print_exc()
+        print(f"motion2robot: error: {err}", file=sys.stderr)
+        return err.exit_code
+    except KeyboardInterrupt:
+        print("motion2robot: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+    except Exception as err:  # a bug, not bad input: still one line unless --debug
+        if debug:
+            raise
+        print(f"motion2robot: internal error: {type(err).__name__}: {err} "
+              "(rerun with --debug for the traceback and please report it)", file=sys.stderr)
+        return 3
+
+
+def run() -> None:  # pragma: no cover - console script shim
+    sys.exit(main())

@@ -1,0 +1,29 @@
+"""Errors a user can act on.
+
+Every problem caused by input (a file, a flag, a robot config, a servo) is raised as a
+:class:`UserError` whose message is ONE line naming the thing, the problem and the fix. The CLI
+prints it on stderr and exits with code 2 (traceback only with ``--debug``).
+"""
+
+from __future__ import annotations
+
+
+class UserError(Exception):
+    """A problem with the user's input; ``str(err)`` is the one-line message shown to the user."""
+
+    exit_code = 2
+
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))  # always one line
+
+
+class InputFileError(UserError):
+    """A file could not be read or has the wrong content."""
+
+
+class RobotConfigError(UserError):
+    """A robot name, model or config is unknown, missing or invalid."""
+
+
+class SolverError(UserError):
+    """The retargeting problem cannot be posed for this motion/robot (not a numerical failure)."""

@@ -1,0 +1,146 @@
+"""Robot motion: what the retargeter produces, the checks judge and the streamer plays.
+
+``qpos`` is (T, nq) in MuJoCo order for the robot's model: free root position xyz (metres, world
+frame, z up), root quaternion **wxyz**, then the hinge angles (radians) in model order
+(``joint_names``). Saved as ``.npz`` with exactly the keys ``qpos``, ``fps``, ``joint_names``,
+``robot``, ``meta`` (a JSON string).
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+
+from motion2robot.errors import InputFileError
+
+NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
+
+
+@dataclass(frozen=True, eq=False)
+class RobotMotion:
+    """A joint-space trajectory of one robot.
+
+    qpos: (T, 7 + n) float64: root xyz (m), root quaternion wxyz, n hinge angles (rad).
+    fps: frames per second.
+    joint_names: the n hinge names in model order.
+    robot: the robot's name as resolved (``op3``, ``menagerie:unitree_g1``, a path), and
+        ``meta["robot_hash"]`` the model hash it was made for.
+    meta: JSON-serialisable facts: source file, clip, prompt, scale, solver figures, ...
+    """
+
+    qpos: np.ndarray
+    fps: float
+    joint_names: tuple[str, ...]
+    robot: str
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        q = np.array(self.qpos, dtype=np.float64)
+        names = tuple(str(n) for n in self.joint_names)
+        if q.ndim != 2 or q.shape[1] != 7 + len(names):
+            raise ValueError(f"qpos must be (T, 7 + {len(names)}), got {q.shape}")
+        q.flags.writeable = False
+        object.__setattr__(self, "qpos", q)
+        object.__setattr__(self, "joint_names", names)
+        object.__setattr__(self, "fps", float(self.fps))
+        object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.qpos.shape[0])
+
+    @property
+    def duration(self) -> float:
+        return self.num_frames / self.fps
+
+    @property
+    def root_pos(self) -> np.ndarray:
+        """(T, 3) root position, metres."""
+        return self.qpos[:, :3]
+
+    @property
+    def root_quat(self) -> np.ndarray:
+        """(T, 4) root orientation, wxyz."""
+        return self.qpos[:, 3:7]
+
+    @property
+    def joints(self) -> np.ndarray:
+        """(T, n) hinge angles, radians, in ``joint_names`` order."""
+        return self.qpos[:, 7:]
+
+    def with_(self, **changes: Any) -> "RobotMotion":
+        if "meta" in changes:
+            changes["meta"] = {**self.meta, **changes["meta"]}
+        return replace(self, **changes)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the ``.npz`` with exactly the keys of :data:`NPZ_KEYS`; returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".part.npz")
+        np.savez(
+            tmp,
+            qpos=self.qpos,
+            fps=np.float64(self.fps),
+            joint_names=np.array(self.joint_names, dtype=str),
+            robot=np.array(self.robot, dtype=str),
+            meta=np.array(json.dumps(dict(self.meta), default=_json_default), dtype=str),
+        )
+        tmp.replace(path)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> "RobotMotion":
+        """Read a RobotMotion ``.npz`` (no pickle); bad files raise :class:`InputFileError`."""
+        path = Path(path)
+        if path.is_dir():
+            raise InputFileError(f"{path}: is a directory, not a robot motion .npz; give the file made by 'motion2robot retarget'")
+        if not path.exists():
+            raise InputFileError(f"{path}: no such file; check the path")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                missing = [k for k in NPZ_KEYS if k not in z.files]
+                if missing:
+                    raise InputFileError(
+                        f"{path}: not a robot motion (missing {', '.join(missing)}); "
+                        "make one with 'motion2robot retarget'")
+                qpos = np.asarray(z["qpos"], dtype=np.float64)
+                fps = float(z["fps"])
+                names = tuple(str(n) for n in z["joint_names"].tolist())
+                robot = str(z["robot"])
+                meta = json.loads(str(z["meta"]))
+        except InputFileError:
+            raise
+        except (OSError, ValueError, zipfile.BadZipFile, json.JSONDecodeError, KeyError) as err:
+            raise InputFileError(
+                f"{path}: cannot read as a robot motion .npz ({err}); make one with 'motion2robot retarget'"
+            ) from err
+        if qpos.ndim != 2 or qpos.shape[1] != 7 + len(names):
+            raise InputFileError(f"{path}: qpos has shape {qpos.shape} but {len(names)} joint names; the file is damaged, retarget again")
+        if not np.all(np.isfinite(qpos)):
+            bad = np.where(~np.all(np.isfinite(qpos), axis=1))[0]
+            raise InputFileError(f"{path}: qpos has NaN/inf in frames {_ranges(bad)}; retarget again")
+        return cls(qpos=qpos, fps=fps, joint_names=names, robot=robot, meta=meta)
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")
+
+
+def _ranges(idx: np.ndarray, limit: int = 6) -> str:
+    """'3-7, 12, 20-21' for sorted frame indices."""
+    from motion2robot.util.ranges import frame_ranges
+
+    return frame_ranges(idx, limit)

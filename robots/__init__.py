@@ -1,0 +1,1 @@
+"""Robot descriptions shipped with motion2robot (installed as the resource package motion2robot.robots)."""
