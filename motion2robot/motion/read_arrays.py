@@ -1,0 +1,188 @@
+"""Readers for numpy-held motion: HumanML3D joints and feature vectors, MDM results, .npz.
+
+All return canonical :class:`HumanMotion` clips (via :func:`canonicalize`). HumanML3D-space
+data (joints, features, MDM) is y up, metres, 20 fps by definition of the data set; the
+units are still sanity-checked from the subject's size.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motion2robot.motion import features as F
+from motion2robot.motion.canonical import canonicalize
+from motion2robot.motion.checks import check_frames, fail
+from motion2robot.motion.human import HumanMotion
+from motion2robot.motion.options import ReadOptions
+from motion2robot.motion.safe_pickle import load_npy
+
+HUMANML3D_FPS = 20.0
+#: Joint counts whose first 22 joints are the SMPL body in HumanML3D order (SMPL, SMPL-H).
+_SMPL_SUPERSETS = (22, 24, 52)
+#: Above this RMS of (x - Mean) / Std, a feature array is taken to be normalised already.
+NORMALISED_RMS = 5.0
+
+
+def _pick(items: list[Any], clip: int | None, path: Path) -> list[tuple[int, Any]]:
+    if clip is None:
+        return list(enumerate(items))
+    if not -len(items) <= clip < len(items):
+        raise fail(path, f"has {len(items)} clip(s), --clip {clip} is out of range",
+                   f"pass --clip between 0 and {len(items) - 1}")
+    return [(clip % len(items), items[clip])]
+
+
+def _canon(path: Path, pos: np.ndarray, fps: float, opts: ReadOptions, fmt: str, clip: int,
+           contacts: np.ndarray | None = None, **meta: Any) -> HumanMotion:
+    return canonicalize(
+        path, pos, opts.fps or fps,
+        up=opts.up or "y", up_source="--up" if opts.up else "the format: HumanML3D space is y up",
+        units=opts.units or "m", units_source="--units" if opts.units else "the format: HumanML3D space is in metres",
+        contacts=contacts, source_fps=fps,
+        meta={"source": str(path), "format": fmt, "clip": clip, **meta})
+
+
+def _joints_clips(path: Path, arr: np.ndarray) -> list[np.ndarray]:
+    """(T, J, 3) or (N, T, J, 3) with J in 22/24/52 -> list of (T, 22, 3)."""
+    if arr.ndim == 3 and arr.shape[1] in _SMPL_SUPERSETS and arr.shape[2] == 3:
+        return [arr[:, :22]]
+    if arr.ndim == 4 and arr.shape[2] in _SMPL_SUPERSETS and arr.shape[3] == 3:
+        return [a[:, :22] for a in arr]
+    raise fail(path, f"has shape {arr.shape}, not HumanML3D joints (T, 22, 3) or a batch (N, T, 22, 3)",
+               "give 22 SMPL joints per frame, or pass --format")
+
+
+def read_joints(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMotion]:
+    """HumanML3D joint positions (T, 22, 3) or a batch (N, T, 22, 3); SMPL/SMPL-H supersets
+    (24 / 52 joints) keep their first 22 joints."""
+    clips = _joints_clips(path, arr)
+    note = {} if arr.shape[-2] == 22 else {"note": f"kept the first 22 of {arr.shape[-2]} joints"}
+    return [_canon(path, c, HUMANML3D_FPS, opts, "humanml3d_joints", i, **note)
+            for i, c in _pick(clips, opts.clip, path)]
+
+
+def _stats(path: Path, which: str, given: Any, dim: int) -> np.ndarray | None:
+    if not given and not path.is_file():
+        return None
+    p = Path(given) if given else path.parent / f"{which}.npy"
+    if not p.is_file():
+        if given:
+            raise fail(p, f"--{which.lower()} file not found", "give the path of the data set's statistics file")
+        return None
+    a = load_npy(p)
+    if not isinstance(a, np.ndarray) or a.shape != (dim,):
+        raise fail(p, f"has shape {getattr(a, 'shape', type(a).__name__)}, expected ({dim},)",
+                   f"give the {which}.npy matching {dim}-d features")
+    return a.astype(np.float64)
+
+
+def denormalise(path: Path, feat: np.ndarray, opts: ReadOptions) -> tuple[np.ndarray, str]:
+    """Raw features and a sentence saying what was assumed (raw or normalised, which stats)."""
+    dim = feat.shape[-1]
+    mean = _stats(path, "Mean", opts.mean, dim)
+    std = _stats(path, "Std", opts.std, dim)
+    if (mean is None) != (std is None):
+        raise fail(path, "needs both Mean.npy and Std.npy to denormalise", "pass --mean and --std together")
+    if mean is not None:
+        rms = float(np.sqrt(np.mean(((feat - mean) / std) ** 2)))
+        if rms < NORMALISED_RMS:
+            return feat, f"raw (|x - Mean|/Std has RMS {rms:.2f}; statistics not applied)"
+        return feat * std + mean, f"normalised (RMS {rms:.1f} as raw), denormalised with the given/adjacent Mean/Std"
+    if F.looks_raw(feat):
+        return feat, "raw (contact channels are exactly 0/1)"
+    height = float(np.median(feat[..., 3]))
+    contacts = feat[..., F.contact_slice(dim)]
+    if 0.05 < height < 2.5 and contacts.min() > -0.5 and contacts.max() < 1.5:
+        return feat, f"raw (root height {height:.2f} m and contact channels in range)"
+    raise fail(path, "looks like normalised features (contact channels not 0/1) and no Mean.npy/Std.npy "
+                     "beside it", "pass --mean Mean.npy --std Std.npy of the model's data set")
+
+
+def read_features(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMotion]:
+    """HumanML3D 263-d features (T, 263) or (N, T, 263), raw or normalised."""
+    if arr.ndim not in (2, 3) or arr.shape[-1] not in F.JOINTS_BY_DIM:
+        raise fail(path, f"has shape {arr.shape}, not feature vectors (T, 263)",
+                   "give HumanML3D 263-d features, or pass --format")
+    if arr.shape[-1] == 251:
+        raise fail(path, "holds KIT-ML 251-d features: they decode (21 KIT joints) but the KIT skeleton has "
+                         "no SMPL22 name map here", "convert to HumanML3D joints first")
+    feat = np.asarray(arr, dtype=np.float64)
+    for f in ([feat] if feat.ndim == 2 else feat):
+        check_frames(path, f, "features")
+    feat, assumed = denormalise(path, feat, opts)
+    clips = [feat] if feat.ndim == 2 else list(feat)
+    out = []
+    for i, f in _pick(clips, opts.clip, path):
+        out.append(_canon(path, F.decode_positions(f), HUMANML3D_FPS, opts, "humanml3d_vecs", i,
+                          contacts=F.decode_contacts(f), contacts_source="263-d contact channels",
+                          features=assumed))
+    return out
+
+
+def _mdm_layout(path: Path, motion: np.ndarray) -> np.ndarray:
+    """(N, 22, 3, T) -> (N, T, 22, 3)."""
+    if motion.ndim != 4 or motion.shape[1] != 22 or motion.shape[2] != 3:
+        raise fail(path, f"has motion shape {motion.shape}, expected (N, 22, 3, T)",
+                   "give MDM-layout joint positions (N, 22, 3, T)")
+    return np.transpose(motion, (0, 3, 1, 2))
+
+
+def read_mdm_array(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMotion]:
+    """A bare MDM-layout array (N, 22, 3, T); (N, 263, 1, T) feature layout is decoded too."""
+    if arr.ndim == 4 and arr.shape[1] == 263 and arr.shape[2] == 1:
+        return read_features(path, np.transpose(arr[:, :, 0, :], (0, 2, 1)), opts)
+    clips = _mdm_layout(path, np.asarray(arr))
+    return [_canon(path, c, HUMANML3D_FPS, opts, "mdm_array", i) for i, c in _pick(list(clips), opts.clip, path)]
+
+
+def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotion]:
+    """MDM results dict: sample i = motion[i, :, :, :lengths[i]] as (T, 22, 3), prompt text[i]."""
+    if not isinstance(obj, dict) or "motion" not in obj:
+        keys = sorted(obj) if isinstance(obj, dict) else type(obj).__name__
+        raise fail(path, f"holds {keys}, not an MDM results dict with 'motion'",
+                   "give MDM's results.npy (motion, text, lengths)")
+    motion = obj["motion"]
+    if not isinstance(motion, np.ndarray):
+        raise fail(path, "'motion' is not an array", "give MDM's results.npy")
+    if motion.ndim == 4 and motion.shape[1] == 263:
+        clips = np.transpose(motion[:, :, 0, :], (0, 2, 1))
+        return read_features(path, clips, opts)
+    clips = _mdm_layout(path, motion)
+    n, t = clips.shape[:2]
+    lengths = np.asarray(obj.get("lengths", np.full(n, t))).astype(np.int64).reshape(-1)
+    text = obj.get("text", [None] * n)
+    if lengths.size != n or len(text) != n:
+        raise fail(path, f"has {n} motions but {lengths.size} lengths and {len(text)} prompts",
+                   "re-save the results with matching motion/text/lengths")
+    too_long = np.flatnonzero((lengths > t) | (lengths < 0))
+    if too_long.size:
+        raise fail(path, f"lengths exceed the motion array ({t} frames): samples {too_long.tolist()[:8]} "
+                         f"claim {lengths[too_long].tolist()[:8]}", "re-save the results (lengths <= T)")
+    out = []
+    for i, c in _pick(list(clips), opts.clip, path):
+        prompt = text[i]
+        out.append(_canon(path, c[: lengths[i]], HUMANML3D_FPS, opts, "mdm_results", i,
+                          prompt=str(prompt) if prompt is not None else None))
+    return out
+
+
+def read_npz(path: Path, opts: ReadOptions) -> list[HumanMotion]:
+    """.npz with a 'joints' or 'positions' array ((T, 22, 3) or a batch) and 'fps'. Axes and units
+    are detected unless --up/--units are given (no convention is implied by .npz)."""
+    with np.load(path, allow_pickle=False) as z:
+        key = next((k for k in ("joints", "positions") if k in z.files), None)
+        if key is None:
+            raise fail(path, f"has no 'joints' or 'positions' array (keys: {', '.join(z.files) or 'none'})",
+                       "save positions as joints=(T, 22, 3) with fps=...")
+        arr = z[key]
+        fps = float(z["fps"]) if "fps" in z.files else None
+    if opts.fps is None and fps is None:
+        raise fail(path, "has no 'fps' entry", "save fps=... in the .npz or pass --fps")
+    clips = _joints_clips(path, arr)
+    return [canonicalize(path, c, opts.fps or fps, up=opts.up, up_source="--up",
+                         units=opts.units, units_source="--units", source_fps=fps,
+                         meta={"source": str(path), "format": "npz", "clip": i, "key": key})
+            for i, c in _pick(clips, opts.clip, path)]
