@@ -54,8 +54,8 @@ EXPECTED = {
     "mdm_results/mdm_walk_pickup_results.npy": ("mdm_results", 3, 60),
     "smpl/amass_dmpl_sample.npz": "needs the licence-restricted SMPL/SMPL-H model files",
     "smpl/aistpp_gBR_sBM_cAll_d04_mBR0_ch01.pkl": "needs the licence-restricted SMPL/SMPL-H model files",
-    "cmu_asf_amc/01.asf": "CMU ASF/AMC, which this version does not read",
-    "cmu_asf_amc/01_01.amc": "CMU ASF/AMC, which this version does not read",
+    "cmu_asf_amc/01.asf": "is an ASF skeleton without motion",  # the skeleton; the take is the .amc
+    "cmu_asf_amc/01_01.amc": ("asf_amc", 1, 2751),
 }
 PAIRED = ("007005", "011673", "012314", "M010968")  # same clip as joints and as 263-d features
 

@@ -32,10 +32,12 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")
     p.add_argument("--up", choices=["x", "y", "z", "-x", "-y", "-z"], help="override up-axis detection")
     p.add_argument("--name-map", dest="name_map", help="TOML map of BVH joint names to SMPL22 keypoints")
+    p.add_argument("--skeleton", metavar="FILE.asf",
+                   help="ASF skeleton of an .amc motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc)")
 
 
 def read_args_kwargs(args: argparse.Namespace) -> dict:
-    return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map")}
+    return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton")}
 
 
 def describe(m, index: int, total: int) -> str:

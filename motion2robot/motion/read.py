@@ -114,7 +114,7 @@ def _folder_files(path: Path) -> list[Path]:
     files = sorted(p for p in path.iterdir()
                    if p.is_file() and p.suffix.lower() in _MOTION_SUFFIXES and p.name.lower() not in skip)
     if not files:
-        raise fail(path, "is a directory without motion files (.npy, .npz, .bvh, .pt)",
+        raise fail(path, "is a directory without motion files (.npy, .npz, .bvh, .pt, .amc)",
                    "give a motion file, or a folder of HumanML3D .npy clips")
     return files
 
@@ -127,7 +127,8 @@ def _read_pkl(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     raise fail(path, f"holds a {type(obj).__name__}, not a known motion pickle", "pass --format")
 
 
-def _read_file(path: Path, fmt: str, opts: ReadOptions) -> list[HumanMotion]:
+def _read_file(path: Path, fmt: str, opts: ReadOptions,
+               skeleton: str | Path | None = None) -> list[HumanMotion]:
     if fmt in ("humanml3d_joints", "humanml3d_vecs", "kit_vecs", "mdm_array", "mdm_results"):
         arr = load_npy(path)
         if fmt == "mdm_results":
@@ -150,21 +151,23 @@ def _read_file(path: Path, fmt: str, opts: ReadOptions) -> list[HumanMotion]:
     if fmt == "aistpp_smpl":
         return _read_pkl(path, opts)
     if fmt == "asf_amc":
-        raise fail(path, "is CMU ASF/AMC, which this version does not read",
-                   "convert it to BVH (e.g. the cgspeed CMU BVH release) and read that")
+        from motion2robot.motion.read_asf_amc import read_asf_amc
+        return read_asf_amc(path, opts, skeleton)
     raise fail(path, f"unknown format {fmt!r}", f"use one of {', '.join(FORMATS)}")
 
 
 def read_motion(path: str | Path, *, format: str | None = None, clip: int | None = None,
                 fps: float | None = None, mean: str | Path | None = None, std: str | Path | None = None,
                 units: str | None = None, up: str | None = None,
-                name_map: str | Path | Mapping[str, Any] | None = None) -> list[HumanMotion]:
+                name_map: str | Path | Mapping[str, Any] | None = None,
+                skeleton: str | Path | None = None) -> list[HumanMotion]:
     """Read a motion file (or a folder of clips) into canonical clips, one per clip.
 
     format: override detection (see :data:`FORMATS`); clip: keep only that clip index (for a
     folder: that file); fps: override the file's rate; mean/std: statistics for normalised
     features; units ("m", "cm", "mm", "inch", "cmu") and up ("x", "y", "z") override
-    detection; name_map: TOML path or {keypoint: joint spec} for BVH skeletons.
+    detection; name_map: TOML path or {keypoint: joint spec} for BVH skeletons; skeleton: the
+    ASF file of an AMC motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc).
     Raises :class:`~motion2robot.errors.InputFileError` with a one-line message on bad input.
     """
     path = Path(path)
@@ -181,10 +184,10 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
         sub = ReadOptions(None, fps, mean, std, units, up, name_map)
         out = []
         for i, f in enumerate(picked):
-            for m in _read_file(f, format or detect_format(f), sub):
+            for m in _read_file(f, format or detect_format(f), sub, skeleton):
                 out.append(m.with_(meta={"clip": clip if clip is not None else i, "folder": str(path)}))
         return out
     if not path.exists():
         raise fail(path, "does not exist", "check the path")
     opts = ReadOptions(clip, fps, mean, std, units, up, name_map)
-    return _read_file(path, format or detect_format(path), opts)
+    return _read_file(path, format or detect_format(path), opts, skeleton)
