@@ -1,0 +1,78 @@
+"""``motion2robot check FILE``: is a motion feasible on the robot? Verdict table, reasons, JSON report.
+
+FILE is a RobotMotion ``.npz`` (from ``motion2robot retarget``) or any human motion file the
+readers accept, which is retargeted first. Exit code 0 feasible, 1 infeasible, 2 error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from motion2robot.cli.cmd_inspect import add_read_options, read_args_kwargs
+from motion2robot.errors import InputFileError, UserError
+from motion2robot.robot_motion import NPZ_KEYS
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "check", help="check a robot motion's feasibility in MuJoCo (limits, collisions, balance, torques, playback)",
+        description="Judge a robot motion (.npz from 'motion2robot retarget') or a human motion file "
+                    "(retargeted first) on the robot: joint, speed, acceleration and torque limits, "
+                    "self-collision, floor, balance (CoM/ZMP), physics playback with servo-like "
+                    "actuators, and the root path against the human's. Exit code 0 feasible, "
+                    "1 infeasible, 2 error.")
+    p.add_argument("file", help="robot motion .npz, or a human motion file (retargeted first)")
+    p.add_argument("--robot", help="robot name or config path (default: the motion's own robot; op3 for human motion)")
+    p.add_argument("--json", metavar="REPORT.json", help="write the FeasibilityReport as JSON")
+    p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
+    p.add_argument("--clip", type=int, help="clip index of a multi-clip human motion file")
+    add_read_options(p)
+    p.set_defaults(func=run)
+
+
+def is_robot_motion(path: Path) -> bool:
+    """True for an .npz holding the RobotMotion keys."""
+    if path.suffix.lower() != ".npz" or not path.is_file():
+        return False
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return all(k in z.files for k in NPZ_KEYS)
+    except (OSError, ValueError, zipfile.BadZipFile):
+        return False
+
+
+def load_for_check(args: argparse.Namespace):
+    """(motion, robot) for the file: a RobotMotion as is, or human motion retargeted."""
+    from motion2robot.robot import load_robot
+    from motion2robot.robot_motion import RobotMotion
+
+    path = Path(args.file)
+    if is_robot_motion(path):
+        motion = RobotMotion.load(path)
+        robot = load_robot(args.robot or motion.robot)
+        return motion, robot
+    from motion2robot.motion import read_motion
+    from motion2robot.retarget import retarget
+
+    clips = read_motion(path, clip=args.clip, **read_args_kwargs(args))
+    if not clips:
+        raise InputFileError(f"{path}: no motion clip found; check the file")
+    if len(clips) > 1:
+        raise UserError(f"{path}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1}")
+    robot = load_robot(args.robot or "op3")
+    return retarget(clips[0], robot), robot
+
+
+def run(args: argparse.Namespace) -> int:
+    from motion2robot.validate import CheckOptions, check, verdict_table
+
+    motion, robot = load_for_check(args)
+    report = check(motion, robot, CheckOptions(physics=args.physics))
+    print(verdict_table(report))
+    if args.json:
+        print(f"report written to {report.to_json(args.json)}")
+    return 0 if report.feasible else 1
