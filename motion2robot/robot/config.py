@@ -50,6 +50,7 @@ The config is validated against the compiled model in :mod:`motion2robot.robot.l
 from __future__ import annotations
 
 import math
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -200,7 +201,7 @@ def parse_config(data: Mapping[str, Any], path: Path | None = None) -> RobotConf
     if model.get("mjcf"):
         mjcf = Path(model["mjcf"])
         if path is not None and not mjcf.is_absolute():
-            mjcf = path.parent / mjcf
+            mjcf = Path(os.path.abspath(path.parent / mjcf))  # absolute: robust to later chdir, readable in listings
 
     defaults = data.get("defaults", {})
     check_keys(defaults, _DEFAULT_KEYS, "defaults")

@@ -18,11 +18,31 @@ _HINGE = mujoco.mjtJoint.mjJNT_HINGE
 _FREE = mujoco.mjtJoint.mjJNT_FREE
 
 
-@functools.lru_cache(maxsize=16)
 def load_robot(name: str = "op3") -> Robot:
     """The robot called ``name`` (``op3`` | ``menagerie:NAME`` | path to MJCF or TOML), compiled and checked.
 
-    Results are cached per process (a Robot is immutable)."""
+    Results are cached per process (a Robot is immutable); paths are keyed by their absolute
+    location and modification time, so an edited config is reloaded."""
+    key = str(name)
+    p = Path(key).expanduser()
+    if p.suffix.lower() in (".xml", ".toml") and p.is_file():
+        key = f"{p.resolve()}@{p.stat().st_mtime_ns}"
+        cfg = p.with_suffix(".toml")
+        if cfg.is_file():
+            key += f"@{cfg.stat().st_mtime_ns}"
+        return _load_cached(key, str(p.resolve()))
+    return _load_cached(key, key)
+
+
+def _cache_clear() -> None:
+    _load_cached.cache_clear()
+
+
+load_robot.cache_clear = _cache_clear  # type: ignore[attr-defined]
+
+
+@functools.lru_cache(maxsize=16)
+def _load_cached(key: str, name: str) -> Robot:
     src = resolve(name)
     config = load_config(src.config_path)
     if src.mjcf_path is not None:

@@ -70,6 +70,22 @@ def menagerie_available(name: str) -> tuple[bool, str]:
         return False, f"mujoco-menagerie: {err}"
 
 
+def _default_entry(name: str, folder: Path) -> str:
+    """The robot entry point of a menagerie folder when the config names none: the registry's
+    ``default_model`` if ``mujoco-menagerie`` knows the robot, else ``NAME.xml``, else the only
+    MJCF that is not a scene."""
+    try:
+        import mujoco_menagerie
+
+        return mujoco_menagerie.get(name).default_model
+    except Exception:  # package absent or robot not in its registry
+        pass
+    if (folder / f"{name}.xml").is_file():
+        return name
+    cands = [p.stem for p in folder.glob("*.xml") if not p.stem.startswith("scene")]
+    return cands[0] if len(cands) == 1 else name
+
+
 def menagerie_mjcf(name: str, entry: str | None) -> tuple[Path, str]:
     """Path of a menagerie robot's MJCF and a description of its origin."""
     root = menagerie_root()
@@ -77,7 +93,7 @@ def menagerie_mjcf(name: str, entry: str | None) -> tuple[Path, str]:
         folder = root / name
         if not folder.is_dir():
             raise RobotConfigError(f"menagerie:{name}: no folder {folder} under MENAGERIE_ROOT; check MENAGERIE_ROOT or the robot name")
-        xml = folder / f"{entry or name}.xml"
+        xml = folder / f"{entry or _default_entry(name, folder)}.xml"
         if not xml.is_file():
             cands = sorted(p.name for p in folder.glob("*.xml"))
             raise RobotConfigError(f"menagerie:{name}: {xml.name} not found in {folder}; set [model] entry to one of {', '.join(cands)}")
