@@ -1,0 +1,84 @@
+"""The safety guard: the one place holding every rule about what may reach a servo.
+
+Rules (all in servo ticks, so what is checked is exactly what goes on the wire):
+- a goal is inside the joint limits, rounded inwards to whole ticks;
+- a goal moves at most ``step`` ticks per control tick from the previous goal, where the step
+  comes from the joint velocity limit (``ramp=True``: from the slower ramp speed);
+- a NaN/inf target holds that joint at its previous goal;
+- start is refused if the present pose is missing/non-finite, outside the limits by more than
+  one step, or a servo reports an Alert / hardware error (:meth:`SafetyGuard.start`);
+- any Alert during streaming is a fault (:meth:`SafetyGuard.check_status`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from motion2robot.hardware.calibration import Calibration
+from motion2robot.hardware.errors import SafetyError
+from motion2robot.hardware.limits import JointLimits
+
+
+class SafetyGuard:
+    """Limits in ticks for the calibration's joints at ``rate_hz`` control ticks per second.
+
+    ``limits`` must be in the calibration's joint order; ``ramp_speed`` rad/s (capped by each
+    joint's velocity limit) is used for ramp-in and ramp-out."""
+
+    def __init__(self, limits: JointLimits, calibration: Calibration, rate_hz: float, ramp_speed: float = 0.5):
+        if tuple(limits.names) != calibration.joints:
+            raise ValueError("guard: limits and calibration must list the same joints in the same order")
+        if not (rate_hz > 0 and ramp_speed > 0):
+            raise ValueError("guard: rate and ramp speed must be > 0")
+        self.cal = calibration
+        self.names = calibration.joints
+        a, b = calibration.ticks_float(limits.lower), calibration.ticks_float(limits.upper)
+        self.lo = np.ceil(np.minimum(a, b) - 1e-9).astype(np.int64)
+        self.hi = np.floor(np.maximum(a, b) + 1e-9).astype(np.int64)
+        k = calibration.ticks_per_rad / rate_hz
+        self.step_max = np.maximum(1, np.floor(limits.velocity * k)).astype(np.int64)
+        self.step_ramp = np.maximum(1, np.floor(np.minimum(ramp_speed, limits.velocity) * k)).astype(np.int64)
+        self.last: np.ndarray | None = None
+
+    def _who(self, i: int) -> str:
+        return f"servo {int(self.cal.ids[i])} ({self.names[i]})"
+
+    def start(self, present: np.ndarray) -> np.ndarray:
+        """Accept the present pose (ticks) as the first goal, or refuse with SafetyError."""
+        present = np.asarray(present, dtype=np.float64)
+        if present.shape != self.lo.shape or not np.all(np.isfinite(present)):
+            raise SafetyError("refusing to start: the present pose could not be read completely")
+        out = np.where(present < self.lo - self.step_max)[0].tolist() + np.where(present > self.hi + self.step_max)[0].tolist()
+        if out:
+            i = out[0]
+            q = float(self.cal.to_radians(present)[i])
+            raise SafetyError(f"refusing to start: {self._who(i)} is at {q:.3f} rad, outside its limits; "
+                              "move it into range by hand with torque off, or check the calibration", int(self.cal.ids[i]))
+        self.last = np.clip(present.astype(np.int64), self.lo, self.hi)
+        return self.last.copy()
+
+    def next_goal(self, target: np.ndarray | None, ramp: bool = False) -> np.ndarray:
+        """Goal ticks for this tick towards ``target`` (rad; None = hold)."""
+        if self.last is None:
+            raise RuntimeError("guard: start() first")
+        if target is None:
+            return self.last.copy()
+        t = self.cal.ticks_float(np.asarray(target, dtype=np.float64))
+        bad = ~np.isfinite(t)
+        t = np.where(bad, self.last, np.clip(np.rint(np.where(bad, 0.0, t)), self.lo, self.hi)).astype(np.int64)
+        step = self.step_ramp if ramp else self.step_max
+        goal = np.clip(self.last + np.clip(t - self.last, -step, step), self.lo, self.hi)
+        self.last = goal
+        return goal.copy()
+
+    def reached(self, target: np.ndarray) -> bool:
+        """True when the last goal equals the (limited) target in ticks."""
+        t = self.cal.ticks_float(np.asarray(target, dtype=np.float64))
+        t = np.where(np.isfinite(t), t, self.last)
+        return bool(np.all(np.clip(np.rint(t), self.lo, self.hi).astype(np.int64) == self.last))
+
+    def check_status(self, status: Mapping[int, int], ids: Sequence[int]) -> list[int]:
+        """IDs whose status byte carries the Alert bit (a fault: the caller stops)."""
+        return [i for i in ids if status.get(i, 0) & 0x80]
