@@ -50,6 +50,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     try:
+        from motion2robot.viz.gl import import_mujoco
+
+        import_mujoco()  # a broken MUJOCO_GL backend fails mujoco's import: make it the one-line error
         parser = build_parser()
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):

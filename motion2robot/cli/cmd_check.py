@@ -28,6 +28,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("file", help="robot motion .npz, or a human motion file (retargeted first)")
     p.add_argument("--robot", help="robot name or config path (default: the motion's own robot; op3 for human motion)")
     p.add_argument("--json", metavar="REPORT.json", help="write the FeasibilityReport as JSON")
+    p.add_argument("--html", metavar="REPORT.html",
+                   help="write a self-contained HTML report (verdict, reasons, plots, key frames)")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--clip", type=int, help="clip index of a multi-clip human motion file")
     add_read_options(p)
@@ -75,4 +77,8 @@ def run(args: argparse.Namespace) -> int:
     print(verdict_table(report))
     if args.json:
         print(f"report written to {report.to_json(args.json)}")
+    if args.html:
+        from motion2robot.viz.html_report import write_html_report
+
+        print(f"HTML report written to {write_html_report(report, motion, robot, args.html)}")
     return 0 if report.feasible else 1
