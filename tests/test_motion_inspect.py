@@ -26,7 +26,7 @@ def test_inspect_synthetic_clip_and_plot(tmp_path: Path, capsys) -> None:
 
 def test_inspect_format_override_is_reported(tmp_path: Path, capsys) -> None:
     np.save(tmp_path / "walk.npy", walking_yup(40))
-    assert main(["inspect", str(tmp_path / "walk.npy"), "--format", "humanml3d_joints", "--fps", "30"]) == 0
+    assert main(["inspect", str(tmp_path / "walk.npy"), "--format", "humanml3d_joints", "--source-fps", "30"]) == 0
     out = capsys.readouterr().out
     assert "(given)" in out and "40 at 30 fps" in out and "file says 20 fps" in out
 

@@ -26,7 +26,8 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
     from motion2robot.motion.read import FORMATS
 
     p.add_argument("--format", choices=FORMATS, help="override format detection")
-    p.add_argument("--fps", type=float, help="override the file's frame rate")
+    p.add_argument("--source-fps", dest="fps", type=float, metavar="FPS",
+                   help="override the frame rate the file declares (e.g. 20 for IK-made BVH files that say 24)")
     p.add_argument("--mean", help="Mean.npy for normalised 263-d features")
     p.add_argument("--std", help="Std.npy for normalised 263-d features")
     p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")

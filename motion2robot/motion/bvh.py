@@ -142,7 +142,7 @@ def parse_bvh(path: str | Path) -> BvhClip:
         raise fail(path, f"is truncated: 'Frames: {n_frames}' but the data holds {data.size / max(n_ch, 1):.6g} "
                          f"frames of {n_ch} channels", "re-export the file or fix its 'Frames:' line")
     if not frame_time > 0:
-        raise fail(path, f"has Frame Time {frame_time}", "fix 'Frame Time:' or pass --fps")
+        raise fail(path, f"has Frame Time {frame_time}", "fix 'Frame Time:' or pass --source-fps")
     values = data[: n_frames * n_ch].reshape(n_frames, n_ch)
     return BvhClip(skel, frame_time, values)
 

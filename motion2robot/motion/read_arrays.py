@@ -180,7 +180,7 @@ def read_npz(path: Path, opts: ReadOptions) -> list[HumanMotion]:
         arr = z[key]
         fps = float(z["fps"]) if "fps" in z.files else None
     if opts.fps is None and fps is None:
-        raise fail(path, "has no 'fps' entry", "save fps=... in the .npz or pass --fps")
+        raise fail(path, "has no 'fps' entry", "save fps=... in the .npz or pass --source-fps")
     clips = _joints_clips(path, arr)
     return [canonicalize(path, c, opts.fps or fps, up=opts.up, up_source="--up",
                          units=opts.units, units_source="--units", source_fps=fps,

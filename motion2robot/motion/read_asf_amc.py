@@ -20,7 +20,7 @@ the spine than in that BVH.
 
 Axes: y up (the CMU convention; ``--up`` overrides). Units: from ``:units length L``
 (1 unit = 1/L inch; CMU's 0.45 = "cmu" units, 5.644 cm). Frame rate: AMC stores none; CMU
-captures at 120 fps (``--fps`` overrides).
+captures at 120 fps (``--source-fps`` overrides).
 """
 
 from __future__ import annotations
