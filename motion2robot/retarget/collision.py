@@ -1,0 +1,208 @@
+"""Self-collision model of the retargeter: one capsule per body, along the longest axis of the
+bounding box (body frame) of the body's collision geoms, radius the larger cross half-extent
+(for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
+for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
+right leg, each arm vs the torso, each hand (the wrist keypoint's body and below) vs every body
+of its own leg.
+
+Pairs of a body and its parent, and pairs already touching at the nominal posture, are left out
+(overlaps of the model's hulls by design); pairs the nominal posture holds closer than
+:data:`NOMINAL_CLEARANCE` get that much clearance at the nominal posture (their capsules overstate
+the hulls). Capsule distance = segment distance - radii (exact);
+:data:`MARGIN` covers box corners outside their capsule.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import mujoco
+import numpy as np
+
+from motion2robot.robot.kinematics import quat_to_mat_np
+from motion2robot.robot.robot import Robot
+
+#: Capsules kept per limb: the largest bodies (legs: thigh, shin, foot; arms: upper arm, forearm;
+#: hand: the wrist keypoint's body and below).
+LIMB_BODIES = {"leg": 3, "arm": 2, "torso": 1, "hand": 2}
+#: Pairs closer than this (m) at the nominal posture get this much clearance there (see CapsulePair).
+NOMINAL_CLEARANCE = 0.01
+#: A box whose long half-extent is this many times its cross half-extent is "elongated".
+ELONGATED = 1.5
+#: Extra clearance (m) kept between capsules (box corners stick out of their capsule a little).
+MARGIN = 0.003
+_ROUND = (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CYLINDER)
+
+
+@dataclass(frozen=True, eq=False)
+class BodyCapsule:
+    """Segment end points ``p0``, ``p1`` (m, in body ``body``'s frame) and ``radius`` (m)."""
+
+    body: int
+    p0: np.ndarray
+    p1: np.ndarray
+    radius: float
+
+
+@dataclass(frozen=True, eq=False)
+class CapsulePair:
+    """Two capsules to keep apart; ``allowance`` (m) is subtracted from their radii (pairs the
+    nominal posture holds closer than :data:`NOMINAL_CLEARANCE`, whose hulls the capsules overstate)."""
+
+    name: str
+    a: BodyCapsule
+    b: BodyCapsule
+    allowance: float = 0.0
+
+
+def _geom_box(m: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
+    """The geom's bounding box in its body's frame: (low corner, high corner)."""
+    rot = quat_to_mat_np(m.geom_quat[g])
+    centre, half = m.geom_aabb[g, :3], m.geom_aabb[g, 3:]
+    corners = centre + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    pts = m.geom_pos[g] + corners @ rot.T
+    return pts.min(axis=0), pts.max(axis=0)
+
+
+def body_capsules(m: mujoco.MjModel) -> dict[int, BodyCapsule]:
+    """Each body's capsule: along the longest axis of the union of its collision geoms' bounding
+    boxes (body frame), radius the larger cross half-extent."""
+    boxes: dict[int, list] = {}
+    rounded: dict[int, bool] = {}
+    for g in range(m.ngeom):
+        if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
+            continue
+        b = int(m.geom_bodyid[g])
+        boxes.setdefault(b, []).append(_geom_box(m, g))
+        rounded[b] = rounded.get(b, True) and m.geom_type[g] in _ROUND
+    out = {}
+    for b, bs in boxes.items():
+        lo = np.min([x[0] for x in bs], axis=0)
+        hi = np.max([x[1] for x in bs], axis=0)
+        centre, half = (lo + hi) / 2, (hi - lo) / 2
+        i = int(np.argmax(half))
+        radius = float(np.max(np.delete(half, i)))
+        # capsules/spheres, and chunky boxes: the inscribed-length capsule; elongated boxes and
+        # meshes (a sole): a capsule over the whole length, so their corners stay inside it
+        long = not rounded[b] and half[i] >= ELONGATED * radius
+        axis = np.eye(3)[i] * (float(half[i]) if long else max(float(half[i]) - radius, 0.0))
+        out[b] = BodyCapsule(b, centre - axis, centre + axis, radius)
+    return out
+
+
+def _chain(m: mujoco.MjModel, body: int, stop: set[int]) -> list[int]:
+    out = []
+    while body > 0 and body not in stop:
+        out.append(body)
+        body = int(m.body_parentid[body])
+    return out
+
+
+def _limbs(robot: Robot) -> dict[str, list[int]]:
+    m = robot.model
+    torso = {robot.root_body, robot.torso_body, *_chain(m, robot.torso_body, {robot.root_body})}
+    limbs = {"torso": sorted(torso)}
+    for side, foot in zip(("left", "right"), robot.foot_bodies):
+        limbs[f"{side}_leg"] = _chain(m, int(foot), torso)
+        for k in (f"{side}_wrist", f"{side}_elbow"):
+            if k in robot.keypoints:
+                body = int(m.site_bodyid[robot.keypoint_sites[robot.keypoints.index(k)]])
+                chain = _chain(m, body, torso)
+                limbs[f"{side}_arm"] = _subtree(m, chain[-1]) if chain else []
+                limbs[f"{side}_hand"] = _subtree(m, body)  # the wrist (or elbow) body and below
+                break
+    return limbs
+
+
+def _subtree(m: mujoco.MjModel, root: int) -> list[int]:
+    """``root`` and its descendants, children before parents (distal first)."""
+    out = [b for b in range(1, m.nbody) if _descends(m, b, root)]
+    return sorted(out, reverse=True)
+
+
+def _descends(m: mujoco.MjModel, body: int, root: int) -> bool:
+    while body > 0:
+        if body == root:
+            return True
+        body = int(m.body_parentid[body])
+    return False
+
+
+def _largest(bodies: list[int], caps: dict[int, BodyCapsule], k: int) -> list[int]:
+    """The ``k`` bodies with the longest capsules (length + diameter), kept in chain order."""
+    size = {b: float(np.linalg.norm(caps[b].p1 - caps[b].p0) + 2 * caps[b].radius) for b in bodies if b in caps}
+    keep = set(sorted(size, key=size.get, reverse=True)[:k])
+    return [b for b in bodies if b in keep]
+
+
+def _gap_np(pa: tuple[np.ndarray, np.ndarray], pb: tuple[np.ndarray, np.ndarray]) -> float:
+    """Distance (m) between two segments given as numpy end points."""
+    s, t = (float(x) for x in closest_parameters(*(ca.DM(x) for x in (*pa, *pb))))
+    return float(np.linalg.norm(pa[0] + s * (pa[1] - pa[0]) - pb[0] - t * (pb[1] - pb[0])))
+
+
+def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
+    """Capsule pairs to keep apart (see the module docstring)."""
+    m = robot.model
+    caps = body_capsules(m)
+    whole = _limbs(robot)
+    limbs = {k: _largest(v, caps, LIMB_BODIES.get(k.split("_")[-1], 1)) for k, v in whole.items()}
+    groups = [("left_leg", "right_leg")]
+    for side in ("left", "right"):
+        if f"{side}_arm" in limbs:
+            limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
+            groups += [(f"{side}_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
+    d = robot.new_data()
+
+    def world(c: BodyCapsule):
+        r, p = d.xmat[c.body].reshape(3, 3), d.xpos[c.body]
+        return p + r @ c.p0, p + r @ c.p1
+
+    out = []
+    for ga, gb in groups:
+        for a in limbs.get(ga, []):
+            for b in limbs.get(gb, []):
+                if a not in caps or b not in caps or m.body_parentid[a] == b or m.body_parentid[b] == a:
+                    continue
+                ca_, cb = caps[a], caps[b]
+                clearance = _gap_np(world(ca_), world(cb)) - ca_.radius - cb.radius - MARGIN
+                if clearance <= 0:
+                    continue  # touching at the nominal posture: by design
+                name = f"{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, a)}-{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)}"
+                out.append(CapsulePair(name, ca_, cb, max(0.0, NOMINAL_CLEARANCE - clearance)))
+    return tuple(out)
+
+
+def _clamp01(x):
+    return ca.fmin(1, ca.fmax(0, x))
+
+
+def closest_parameters(p1, q1, p2, q2):
+    """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2) of two
+    segments (casadi SX or DM 3-vectors): Ericson, Real-Time Collision Detection, 5.1.9,
+    branch-free (if_else)."""
+    eps, tiny = 1e-12, 1e-10  # tiny: squared length (m^2) below which a segment is a point
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a, e, f = ca.dot(d1, d1) + eps, ca.dot(d2, d2) + eps, ca.dot(d2, r)
+    c, b = ca.dot(d1, r), ca.dot(d1, d2)
+    s = _clamp01((b * f - c * e) / ca.fmax(a * e - b * b, eps))
+    s = ca.if_else(e <= tiny, _clamp01(-c / a), ca.if_else(a <= tiny, 0, s))
+    t = (b * s + f) / e
+    s = ca.if_else(t < 0, _clamp01(-c / a), ca.if_else(t > 1, _clamp01((b - c) / a), s))
+    return s, _clamp01(t)
+
+
+def pair_gap(pair: CapsulePair, ends, ends_now=None):
+    """Symbolic clearance (m) of a capsule pair minus :data:`MARGIN` (negative = too close).
+
+    ``ends(capsule)`` gives a capsule's two world end points (casadi 3-vectors). With
+    ``ends_now`` (the same at the current iterate, without the step) the closest-point parameters
+    are taken from those: constants of differentiation (by the envelope theorem their derivative
+    does not change the distance's), which keeps the Jacobian as cheap as two points'."""
+    a0, a1 = ends(pair.a)
+    b0, b1 = ends(pair.b)
+    ref = ends if ends_now is None else ends_now
+    s, t = closest_parameters(*ref(pair.a), *ref(pair.b))
+    dist = ca.sqrt(ca.sumsqr(a0 + s * (a1 - a0) - b0 - t * (b1 - b0)) + 1e-12)
+    return dist - pair.a.radius - pair.b.radius - MARGIN + pair.allowance

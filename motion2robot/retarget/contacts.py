@@ -1,0 +1,61 @@
+"""Contact phases of each foot, and the anchored sole placement of each phase.
+
+Labels come from the motion (``HumanMotion.contacts``) or, when absent, from
+:func:`motion2robot.motion.contacts.detect_contacts`. During a phase (a run of contact frames)
+the sole is pinned: its four corners at one placement on the floor (z = 0), the placement being
+where the unpinned solve put the sole (centre and yaw) in the phase's first frame, so the foot
+lands where it can (the unpinned solve already respects the velocity limits) and stays there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from motion2robot.errors import SolverError
+from motion2robot.motion.contacts import detect_contacts
+from motion2robot.motion.human import HumanMotion
+
+
+def contact_labels(human: HumanMotion) -> tuple[np.ndarray, str]:
+    """(T, 2) bool [left, right] and where they came from ("file" or "detected")."""
+    if human.contacts is not None:
+        labels, source = np.asarray(human.contacts, dtype=bool), "file"
+    else:
+        labels, source = detect_contacts(human), "detected"
+    if not labels.any():
+        where = human.meta.get("source", "the motion")
+        raise SolverError(f"{where}: the feet never touch the floor (no contact frames, {source} labels); "
+                          "retarget a motion that stands on the floor, or give contact labels")
+    return labels, source
+
+
+def phases(labels: np.ndarray) -> list[tuple[int, int, int]]:
+    """Runs of contact as (foot, first frame, last frame + 1)."""
+    out = []
+    for f in range(labels.shape[1]):
+        x = np.concatenate([[False], labels[:, f], [False]]).astype(np.int8)
+        d = np.diff(x)
+        out.extend((f, int(a), int(b)) for a, b in zip(np.where(d == 1)[0], np.where(d == -1)[0]))
+    return out
+
+
+def _rotz(yaw: np.ndarray) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def anchor_soles(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Pinned sole corners (T, 2, 4, 3) for every contact frame (NaN elsewhere), from the sole
+    corners ``corners`` (T, 2, 4, 3) of an unpinned solve: per phase, the centre and yaw of the
+    sole in its first frame, the corners' mean layout about the centre (a rigid rectangle), at z = 0."""
+    out = np.full(corners.shape, np.nan)
+    for f, a, b in phases(labels):
+        c = corners[a:b, f]                                   # (n, 4, 3)
+        centre = c[..., :2].mean(axis=1)                      # (n, 2)
+        fwd = (c[:, 0, :2] + c[:, 1, :2]) - (c[:, 2, :2] + c[:, 3, :2])   # front minus back
+        yaw_t = np.arctan2(fwd[:, 1], fwd[:, 0])
+        rel = np.einsum("nij,nkj->nki", _rotz(-yaw_t), c[..., :2] - centre[:, None])  # sole layout, (n, 4, 2)
+        layout = rel.mean(axis=0)
+        out[a:b, f, :, :2] = centre[0] + layout @ _rotz(np.array(yaw_t[0])).T
+        out[a:b, f, :, 2] = 0.0
+    return out

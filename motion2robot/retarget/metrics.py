@@ -1,0 +1,85 @@
+"""The retargeting acceptance figures of one result, measured with MuJoCo on the robot's own
+geometry (not with the solver's model): joint-limit violations, worst sole depth, share of
+contact frames whose sole centre moves at most 1 cm/s, worst self-collision depth (MuJoCo geoms,
+the validator's pair rules), joint speed / limit, CoM inside the shrunk support polygon."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from motion2robot.retarget.constraints import MARGIN_FRACTION, convex_hull, halfplanes
+from motion2robot.robot.robot import Robot
+from motion2robot.robot_motion import RobotMotion
+
+SLIDE_SPEED = 0.01  # m/s
+
+
+def _self_collision_depth(robot: Robot, qpos: np.ndarray) -> np.ndarray:
+    """(T,) deepest robot-robot penetration per frame (m), validator's ignored pairs excluded."""
+    from motion2robot.validate.collision import ignored_body_pairs
+    from motion2robot.validate.models import check_model, floor_geom
+
+    m = check_model(robot)
+    d = mujoco.MjData(m)
+    floor = floor_geom(m)
+    ignore = ignored_body_pairs(robot)
+    out = np.zeros(len(qpos))
+    for t, q in enumerate(qpos):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        for c in d.contact[:d.ncon]:
+            g1, g2 = int(c.geom[0]), int(c.geom[1])
+            if floor in (g1, g2):
+                continue
+            pair = tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2]))))
+            if pair not in ignore:
+                out[t] = max(out[t], -float(c.dist))
+    return out
+
+
+def acceptance(motion: RobotMotion, robot: Robot, collisions: bool = True) -> dict:
+    """Figures of ``motion`` (made by :func:`~motion2robot.retarget.retarget`, whose meta holds the
+    contact labels) on ``robot``."""
+    q = motion.qpos
+    T = len(q)
+    hinge = q[:, 7:]
+    tol = 1e-9
+    limit_viol = int(np.sum(hinge < robot.lower - tol) + np.sum(hinge > robot.upper + tol))
+    vel = np.abs(np.diff(hinge, axis=0)) * motion.fps
+    speed_ratio = float((vel / robot.velocity_limit).max()) if T > 1 else 0.0
+    m = robot.model
+    d = mujoco.MjData(m)
+    corners = np.zeros((T, 2, 4, 3))
+    com = np.zeros((T, 3))
+    for t in range(T):
+        d.qpos[:] = q[t]
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        corners[t] = d.site_xpos[robot.sole_sites.ravel()].reshape(2, 4, 3)
+        com[t] = d.subtree_com[robot.root_body]
+    labels = np.asarray(motion.meta.get("contacts", np.zeros((T, 2))), dtype=bool)
+    depth = float(max(0.0, -corners[..., 2].min()))
+    centre = corners[..., :2].mean(axis=2)                      # (T, 2, 2)
+    both = labels[1:] & labels[:-1]
+    speed = np.linalg.norm(np.diff(centre, axis=0), axis=-1) * motion.fps
+    n_contact = int(both.sum())
+    slow = float((speed[both] <= SLIDE_SPEED).mean()) if n_contact else 1.0
+    half = min(min(f.sole_half) for f in robot.config.feet)
+    margin = float(motion.meta.get("support_margin", MARGIN_FRACTION * half))
+    inside = []
+    for t in range(T):
+        feet = np.where(labels[t])[0]
+        if len(feet) == 0:
+            continue
+        planes = halfplanes(convex_hull(corners[t, feet, :, :2].reshape(-1, 2)), margin)
+        inside.append(np.all(planes[:, :2] @ com[t, :2] - planes[:, 2] <= 1e-4))
+    coll = _self_collision_depth(robot, q) if collisions else np.zeros(T)
+    return {
+        "frames": T, "limit_violations": limit_viol, "sole_depth_mm": 1000 * depth,
+        "contact_frames": n_contact, "contact_slow_pct": 100 * slow,
+        "max_sole_speed_cm_s": float(100 * speed[both].max()) if n_contact else 0.0,
+        "self_collision_mm": float(1000 * coll.max()), "speed_ratio": speed_ratio,
+        "com_inside_pct": 100 * float(np.mean(inside)) if inside else 100.0,
+    }

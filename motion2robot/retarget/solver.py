@@ -1,0 +1,178 @@
+"""The fast path: batched Gauss-Newton / Levenberg-Marquardt over every frame of a clip at once.
+
+One call of the compiled, frame-mapped ``step`` function returns each frame's normal matrix
+``J'J`` and gradient ``J'r`` (see :mod:`motion2robot.retarget.problem`). The temporal terms
+(velocity and acceleration of the tangent-space state) couple neighbouring frames; they enter as a
+block-Jacobi term (neighbours held at the current iterate), which keeps every frame's linear
+system independent: one ``np.linalg.solve`` over the (T, nv, nv) stack per iteration. A frame
+whose objective went up is sent back and its damping raised (per-frame LM). Hinges are projected
+onto their limits after every step.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from motion2robot.retarget.compiled import CompiledProblem
+from motion2robot.retarget.costs import Weights
+from motion2robot.retarget.problem import apply_step, tangent_diff
+
+#: Largest change of any state coordinate in one correction step (rad, or m / leg length).
+MAX_CORRECTION = 0.2
+
+
+@dataclass(frozen=True)
+class SolveStats:
+    """Figures of one solve: iterations, seconds, final per-frame objective and per-term costs."""
+
+    iterations: int
+    time_s: float
+    cost: np.ndarray     # (T,) frame objective (without temporal terms)
+    terms: np.ndarray    # (T, len(FRAME_TERMS))
+
+
+def _temporal(Q: np.ndarray, sv: np.ndarray, w: Weights) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Block-Jacobi gradient (T, nv), diagonal (T, 1) and per-frame cost (T,) of the velocity and
+    acceleration terms (state difference scaled by ``sv``: 1/L for root position, 1 for angles)."""
+    T = len(Q)
+    g = np.zeros((T, len(sv)))
+    diag = np.zeros((T, 1))
+    cost = np.zeros(T)
+    if T < 2:
+        return g, diag, cost
+    v = tangent_diff(Q[1:], Q[:-1]) * sv                    # v[t] = x[t+1] - x[t], (T-1, nv)
+    wv, wa = w.velocity, w.acceleration
+    g[1:] += wv * v * sv
+    g[:-1] -= wv * v * sv
+    diag[1:] += wv
+    diag[:-1] += wv
+    cost[1:] += wv * np.sum(v * v, axis=1)
+    if T >= 3:
+        a = v[1:] - v[:-1]                                  # a[t] centred at frame t+1, (T-2, nv)
+        g[1:-1] += -2 * wa * a * sv
+        g[:-2] += wa * a * sv
+        g[2:] += wa * a * sv
+        diag[1:-1] += 4 * wa
+        diag[:-2] += wa
+        diag[2:] += wa
+        cost[1:-1] += wa * np.sum(a * a, axis=1)
+    return g, diag, cost
+
+
+def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights: Weights,
+          iterations: int, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None = None,
+          tol: float = 1e-12) -> tuple[np.ndarray, SolveStats]:
+    """Minimise every frame's objective from ``q0`` (T, nq) with frame parameters ``params``
+    (T, n_params); returns the (T, nq) solution and its figures. Hinges stay within [lower, upper].
+
+    max_step: (n,) largest hinge change between frames (rad; velocity limit / fps). When given,
+    each frame's hinges are also bounded to within ``max_step`` of both neighbours' current values
+    (start from a trajectory that satisfies it; finish with an exact clamping pass).
+
+    Per-frame LM: a frame whose objective (its own terms + the temporal terms with its neighbours)
+    went up is put back and retried with ten times the damping."""
+    t0 = time.perf_counter()
+    spec = problem.spec
+    T, nv = q0.shape[0], spec.nv
+    sv2 = np.ones(nv)
+    sv2[:3] = 1.0 / spec.length ** 2
+    sv = np.sqrt(sv2)
+    step = problem.step_eval(T)
+    wvec = np.array(weights.frame_vector())
+    Q = q0.copy()
+    Q[:, 7:] = np.clip(Q[:, 7:], lower, upper)
+    lam = np.full(T, 1e-3)
+    n = nv - 6
+    lm = np.zeros((T, 1 + 2 * nv + 2 * n))
+    f_prev = np.full(T, np.inf)
+    Q_prev = Q.copy()
+    it = 0
+    for it in range(1, iterations + 1):
+        gt, dt, ct = _temporal(Q, sv, weights)
+        lm[:, 0] = lam
+        lm[:, 1:1 + nv] = dt * sv2 + weights.damping
+        lm[:, 1 + nv:1 + 2 * nv] = gt
+        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
+        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo
+        lm[:, 1 + 2 * nv + n:] = hi
+        dx, cost, _ = step(Q, params, wvec, lm)
+        f = cost[:, 0] + ct
+        bad = f > f_prev * (1 + 1e-12)
+        if bad.any():  # put those frames back; their step is recomputed next round with more damping
+            Q[bad] = Q_prev[bad]
+            f[bad] = f_prev[bad]
+            dx[bad] = 0.0
+        lam = np.where(bad, lam * 10.0, np.maximum(lam * 0.3, 1e-7))
+        if not bad.any() and np.max(f_prev - f) < tol:
+            break
+        f_prev, Q_prev = f, Q.copy()
+        Q = apply_step(Q, dx)
+        Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
+    lm[:, :1 + 2 * nv] = 0.0
+    lm[:, 1:1 + nv] = 1.0
+    _, cost, terms = step(Q, params, wvec, lm)
+    bad = cost[:, 0] + _temporal(Q, sv, weights)[2] > f_prev * (1 + 1e-12)
+    if bad.any():  # the last step made these frames worse: keep their previous iterate
+        Q[bad] = Q_prev[bad]
+        _, cost, terms = step(Q, params, wvec, lm)
+    return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
+
+
+def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None):
+    """Per-frame hinge bounds (T, n): the joint limits, tightened to ``max_step`` of the neighbours'
+    current values (never excluding the current value)."""
+    lo = np.broadcast_to(lower, q.shape).copy()
+    hi = np.broadcast_to(upper, q.shape).copy()
+    if max_step is not None and len(q) > 1:
+        lo[1:] = np.maximum(lo[1:], q[:-1] - max_step)
+        lo[:-1] = np.maximum(lo[:-1], q[1:] - max_step)
+        hi[1:] = np.minimum(hi[1:], q[:-1] + max_step)
+        hi[:-1] = np.minimum(hi[:-1], q[1:] + max_step)
+        lo, hi = np.minimum(lo, q), np.maximum(hi, q)
+    return lo, hi
+
+
+def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+            max_step: np.ndarray | None, iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """Newton projection onto the hard constraints (see ``project`` in
+    :mod:`motion2robot.retarget.problem`), ``iterations`` times; hinges stay in their per-frame
+    bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation."""
+    T, nv = Q.shape[0], problem.spec.nv
+    n = nv - 6
+    proj = problem.project_eval(T)
+    lm = np.zeros((T, 1 + 2 * nv + 2 * n))
+    Q = Q.copy()
+    Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
+    for _ in range(iterations + 1):
+        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
+        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo
+        lm[:, 1 + 2 * nv + n:] = hi
+        dx, v = proj(Q, params, lm)
+        v = v[:, 0]
+        worse = v > v_prev  # a step that did not help (infeasible target): keep the frame as it was
+        Q[worse], v[worse], dx[worse] = Q_prev[worse], v_prev[worse], 0.0
+        if _ == iterations:
+            break
+        dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
+        Q_prev, v_prev = Q.copy(), v
+        Q = apply_step(Q, dx)
+        Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
+    return Q, v_prev
+
+
+def objective(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, weights: Weights) -> tuple[np.ndarray, np.ndarray]:
+    """The objective of trajectory ``Q`` (T, nq): per-frame per-term costs (T, len(FRAME_TERMS))
+    and per-frame temporal cost (T,) (velocity + acceleration of the tangent-space state)."""
+    T, nv = Q.shape[0], problem.spec.nv
+    sv = np.ones(nv)
+    sv[:3] = 1.0 / problem.spec.length
+    lm = np.zeros((T, 1 + 2 * nv + 2 * (nv - 6)))
+    lm[:, 1:1 + nv] = 1.0
+    lm[:, 1 + 2 * nv:1 + 2 * nv + nv - 6] = Q[:, 7:]
+    lm[:, 1 + 2 * nv + nv - 6:] = Q[:, 7:]
+    _, _, terms = problem.step_eval(T)(Q, params, np.array(weights.frame_vector()), lm)
+    return terms, _temporal(Q, sv, weights)[2]
+

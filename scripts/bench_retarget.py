@@ -1,0 +1,220 @@
+"""Benchmark and acceptance figures of the retargeter; prints every figure it measures.
+
+    MENAGERIE_ROOT=/work/shared/menagerie python scripts/bench_retarget.py [--quick] [--robots op3,menagerie:unitree_g1]
+
+1. compile time of the op3 problem (fresh cache directory), and of each robot's (cached if so);
+2. speed on op3 with every constraint on: frames per CPU-second of this process (one core),
+   solver only, after compilation, best of 3 runs over the HumanML3D clips and the demo;
+3. the per-frame IPOPT baseline of the same costs on a subset, its speed, the ratio, and how
+   close its answer is (mean keypoint error of both, mean |dq|);
+4. reachable targets: keypoints from the robot's own FK along random smooth joint trajectories
+   (within limits, lowest sole on the floor), retargeted with unit scale, no contacts/balance,
+   tracking + temporal terms and a faint posture term (IK under joint and velocity limits):
+   mean keypoint error;
+5. per clip of ../shared/motions that read_motion reads, for each robot: limit violations, worst
+   sole depth, % of contact frames with sole speed <= 1 cm/s, worst self-collision depth (MuJoCo
+   geoms), max joint speed / limit, CoM-in-shrunk-polygon % (quasi-static clips, balance on;
+   the other clips are retargeted with balance off), then totals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from motion2robot.errors import UserError
+from motion2robot.motion import HumanMotion, read_motion
+from motion2robot.motion.human import KP, SMPL22
+from motion2robot.motion.ops import trim
+from motion2robot.retarget import RetargetOptions, Weights, retarget
+from motion2robot.retarget import compiled as compiled_mod
+from motion2robot.retarget.metrics import acceptance
+from motion2robot.retarget.scale import Scale
+from motion2robot.robot import load_robot
+
+#: Clips meant to be quasi-static (standing, waving, reaching, bowing): balance on and judged.
+QUASI_STATIC = ("M010968.npy", "bandai_byebye_normal_001.bvh", "bandai_bow_normal_001.bvh", "demo_wave_squat.npy")
+MAX_AMPLITUDE = 0.5  # rad, reachable-target trajectories
+POSTURE_REACHABLE = 1e-6  # posture weight of the reachable-target runs
+SUFFIXES = (".npy", ".npz", ".bvh", ".pkl", ".pt", ".amc")
+
+
+def shared_dir() -> Path:
+    env = os.environ.get("MOTION2ROBOT_SHARED")
+    return Path(env) if env else ROOT.parent / "shared"
+
+
+def clips(shared: Path) -> list[tuple[str, HumanMotion]]:
+    out = [("demo_wave_squat.npy", read_motion(ROOT / "motion2robot" / "data" / "demo_wave_squat.npy")[0])]
+    for path in sorted((shared / "motions").rglob("*")):
+        if not path.is_file() or path.suffix not in SUFFIXES or path.stem in ("Mean", "Std"):
+            continue
+        try:
+            human = read_motion(path)
+        except UserError as err:
+            print(f"  (skipped {path.relative_to(shared)}: {err})")
+            continue
+        for i, h in enumerate(human[:3]):  # at most 3 samples of a multi-clip file
+            out.append((f"{path.parent.name}/{path.name}" + (f"#{i}" if len(human) > 1 else ""), h))
+    return out
+
+
+def compile_time() -> None:
+    robot = load_robot("op3")
+    with tempfile.TemporaryDirectory() as tmp:
+        old = os.environ.get("MOTION2ROBOT_CACHE")
+        os.environ["MOTION2ROBOT_CACHE"] = tmp
+        try:
+            cp = compiled_mod.compiled_problem.__wrapped__(robot)
+        finally:
+            if old is None:
+                os.environ.pop("MOTION2ROBOT_CACHE")
+            else:
+                os.environ["MOTION2ROBOT_CACHE"] = old
+    print(f"compile (op3, fresh cache): build casadi graph {cp.build_s:.2f} s, gcc {' '.join(compiled_mod.CFLAGS)} {cp.compile_s:.1f} s")
+
+
+def speed(robot, humans: list[HumanMotion]) -> float:
+    retarget(humans[0], robot)  # compile / load the library, warm caches
+    best = 0.0
+    frames = sum(h.num_frames for h in humans)
+    for _ in range(3):
+        cpu = wall = 0.0
+        for h in humans:
+            c0 = time.process_time()
+            m = retarget(h, robot)
+            cpu += time.process_time() - c0
+            wall += m.meta["solver"]["time_s"]
+        best = max(best, frames / cpu)
+        print(f"  run: {frames} frames, {cpu:.3f} CPU-s (whole retarget() call) -> {frames / cpu:.0f} frames/s/core; "
+              f"solver wall {wall:.3f} s -> {frames / wall:.0f} frames/s")
+    print(f"speed (op3, every constraint on, one process, after compilation): {best:.0f} frames per CPU-second")
+    return best
+
+
+def baseline(robot, human: HumanMotion, fast_fps: float) -> None:
+    fast = retarget(human, robot)
+    c0 = time.process_time()
+    slow = retarget(human, robot, RetargetOptions(solver="ipopt"))
+    cpu = time.process_time() - c0
+    ipopt_fps = human.num_frames / cpu
+    ef, es = (np.mean(m.meta["solver"]["residual_per_frame"]) for m in (fast, slow))
+    dq = np.abs(fast.qpos[:, 7:] - slow.qpos[:, 7:]).mean()
+    print(f"IPOPT baseline ({human.num_frames} frames of {Path(str(human.meta.get('source'))).name}): "
+          f"{ipopt_fps:.1f} frames per CPU-second; fast/IPOPT = {fast_fps / ipopt_fps:.0f}x")
+    of, os_ = (m.meta["solver"]["objective"]["total"] for m in (fast, slow))
+    print(f"  same answer? objective (same costs, final trajectories) fast {of:.4f} vs IPOPT {os_:.4f}; "
+          f"mean keypoint error fast {1000 * ef:.1f} mm vs IPOPT {1000 * es:.1f} mm; "
+          f"mean |dq| {dq:.3f} rad; worst constraint residual fast {1000 * fast.meta['solver']['max_constraint_residual']:.3f} mm, "
+          f"IPOPT {1000 * slow.meta['solver']['max_constraint_residual']:.3f} mm")
+
+
+def reachable(robot, seeds: int = 3, T: int = 40, fps: float = 20.0, amplitude: float = 0.15) -> float:
+    cp = compiled_mod.compiled_problem(robot)
+    points = cp.points_eval(T)
+    errs = []
+    # IK: tracking terms, a faint posture term and the temporal terms (they pick one solution in
+    # the null space of redundant robots, else frames wander apart and the velocity limit bites);
+    # no floor/self-collision terms or corrections (a random trajectory may pass through the
+    # solver's capsules); joint and velocity limits kept
+    zero = {k: 0.0 for k in ("pelvis_heading", "torso_up", "foot_heading", "sole_flat", "floor", "self_collision")}
+    zero["posture"] = POSTURE_REACHABLE
+    seed = -1
+    while len(errs) < seeds and seed < 30:
+        seed += 1
+        rng = np.random.default_rng(seed)
+        t = np.arange(T) / fps
+        span = robot.upper - robot.lower
+        shape = np.sin(2 * np.pi * rng.uniform(0.1, 0.25, robot.n_joints) * t[:, None] + rng.uniform(0, 6.3, robot.n_joints))
+        hinges = np.clip(robot.nominal_qpos[7:] + np.minimum(amplitude * span, MAX_AMPLITUDE) * shape, robot.lower, robot.upper)
+        q = np.tile(robot.nominal_qpos, (T, 1))
+        q[:, 7:] = hinges
+        q[:, 2] -= points(q)[1].reshape(T, -1, 3)[..., 2].min(axis=1)
+        kp = points(q)[0].reshape(T, -1, 3)
+        pos = np.repeat(kp[:, [robot.keypoints.index("pelvis")]], len(SMPL22), axis=1)
+        for i, name in enumerate(robot.keypoints):
+            pos[:, KP[name]] = kp[:, i]
+        out = retarget(HumanMotion(pos, fps, meta={"source": "fk"}), robot,
+                       RetargetOptions(balance=False, contacts=False, scale=Scale(1.0, 1.0, 1.0),
+                                       weights=Weights(**zero), iterations=(40, 10), corrections=0))
+        errs.append(np.mean(out.meta["solver"]["residual_per_frame"]))
+    err = float(np.mean(errs)) if errs else float("nan")
+    print(f"reachable targets ({robot.name}, {len(errs)} random smooth trajectories x {T} frames, "
+          f"hinges nominal +- min({amplitude:g} x range, {MAX_AMPLITUDE} rad), {seed + 1} drawn): mean keypoint error {1000 * err:.4f} mm")
+    return err
+
+
+def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
+    print(f"\nacceptance on {robot.name} ({len(items)} clips)")
+    head = f"{'clip':44s} {'frames':>6s} {'bal':>3s} {'limits':>6s} {'depth mm':>8s} {'slow %':>7s} {'coll mm':>7s} {'v/vmax':>6s} {'CoM in %':>8s} {'kp mm':>6s}"
+    print(head)
+    tot = {"frames": 0, "limits": 0, "depth": 0.0, "contact": 0, "slow": 0.0, "coll": 0.0, "speed": 0.0, "com_bad": 0}
+    for name, h in items:
+        quasi = Path(name.split("#")[0]).name in QUASI_STATIC
+        try:
+            m = retarget(h, robot, RetargetOptions(balance=quasi))
+        except UserError as err:
+            print(f"{name[:44]:44s} refused: {err}")
+            continue
+        a = acceptance(m, robot)
+        com = f"{a['com_inside_pct']:8.1f}" if quasi else f"{'-':>8s}"
+        kp = 1000 * np.mean(m.meta["solver"]["residual_per_frame"])
+        print(f"{name[:44]:44s} {a['frames']:6d} {'on' if quasi else 'off':>3s} {a['limit_violations']:6d} {a['sole_depth_mm']:8.2f} "
+              f"{a['contact_slow_pct']:7.1f} {a['self_collision_mm']:7.2f} {a['speed_ratio']:6.3f} {com} {kp:6.1f}", flush=True)
+        tot["frames"] += a["frames"]
+        tot["limits"] += a["limit_violations"]
+        tot["depth"] = max(tot["depth"], a["sole_depth_mm"])
+        tot["contact"] += a["contact_frames"]
+        tot["slow"] += a["contact_slow_pct"] / 100 * a["contact_frames"]
+        tot["coll"] = max(tot["coll"], a["self_collision_mm"])
+        tot["speed"] = max(tot["speed"], a["speed_ratio"])
+        if quasi:
+            tot["com_bad"] += int(a["com_inside_pct"] < 100.0)
+    slow = 100 * tot["slow"] / max(tot["contact"], 1)
+    print(f"{'TOTAL':44s} {tot['frames']:6d} {'':>3s} {tot['limits']:6d} {tot['depth']:8.2f} {slow:7.1f} {tot['coll']:7.2f} {tot['speed']:6.3f} "
+          f"{'quasi-static clips with CoM outside: ' + str(tot['com_bad'])}")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--robots", default="op3,menagerie:unitree_g1")
+    ap.add_argument("--quick", action="store_true", help="skip the fresh compile and use fewer clips")
+    args = ap.parse_args()
+    warnings.filterwarnings("ignore")
+    shared = shared_dir()
+    if not (shared / "motions").is_dir():
+        print(f"no motions folder under {shared}; set MOTION2ROBOT_SHARED")
+        return 2
+    if not args.quick:
+        compile_time()
+    op3 = load_robot("op3")
+    hml = [read_motion(p)[0] for p in sorted((shared / "motions" / "humanml3d_joints").glob("*.npy"))
+           if "raw" not in p.name]
+    hml.append(read_motion(ROOT / "motion2robot" / "data" / "demo_wave_squat.npy")[0])
+    fast_fps = speed(op3, hml)
+    baseline(op3, trim(hml[-2], 0, 40), fast_fps)
+    items = clips(shared)
+    if args.quick:
+        items = items[::3]
+    for name in args.robots.split(","):
+        robot = load_robot(name)
+        cp = compiled_mod.compiled_problem(robot)
+        print(f"\n{robot.name}: {robot.n_joints} joints; problem built in {cp.build_s:.2f} s, "
+              f"compiled in {cp.compile_s:.1f} s{' (from cache)' if cp.cached else ''}")
+        reachable(robot)
+        table(robot, items)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
