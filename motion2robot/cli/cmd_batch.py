@@ -1,0 +1,91 @@
+"""``motion2robot batch INPUTS... --robot NAME --out results.jsonl``: feasibility of a whole data set."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "batch", help="retarget and check many clips (files, folders, manifests) into a JSONL file",
+        description="Read every clip of the INPUTS, retarget it onto the robot and check it; write one JSON "
+                    "line per clip to --out as soon as it is done (fsync-ed: a crash loses at most the clips "
+                    "in flight). Rerunning skips clips already in the file (resume). Bad files become rows "
+                    "with an 'error', never a crashed batch. Ends with a summary (see also 'batch-report').")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="motion files, folders (searched recursively for .npy .npz .bvh .pt .pth .pkl .amc) "
+                        "or manifests (.txt/.lst: one path per line, relative to the manifest)")
+    p.add_argument("--robot", default="op3", help="robot name (op3, menagerie:unitree_g1, ...) or config path "
+                                                  "(default: op3)")
+    p.add_argument("--out", required=True, help="results file (JSON Lines); appended to and resumed")
+    p.add_argument("--jobs", "-j", type=int, default=os.cpu_count() or 1,
+                   help="worker processes / Ray CPUs (default: all cores)")
+    p.add_argument("--backend", choices=["local", "ray"], default="local",
+                   help="local process pool (default) or Ray tasks (pip install 'motion2robot[ray]')")
+    p.add_argument("--ray-address", help="join this Ray cluster (e.g. auto, ray://host:10001) instead of "
+                                         "starting a local one")
+    p.add_argument("--no-physics", action="store_true",
+                   help="kinematic checks only (skip the MuJoCo rollout): much faster")
+    p.add_argument("--save-motions", metavar="DIR", help="also save each retargeted robot motion (.npz) here")
+    p.add_argument("--redo", action="store_true", help="process every clip again (their old rows are removed)")
+    p.add_argument("--redo-errors", action="store_true", help="process again the clips whose row is an error")
+    p.add_argument("--max-tasks-per-child", type=int, metavar="N",
+                   help="restart each local worker after N clips (guards against leaks; default: never)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    from motion2robot.cli.cmd_inspect import add_read_options
+
+    add_read_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+    from motion2robot.cli.cmd_inspect import read_args_kwargs
+    from motion2robot.errors import UserError
+    from motion2robot.robot import load_robot
+
+    if args.jobs < 1:
+        raise UserError(f"--jobs {args.jobs}: give at least 1")
+    if args.ray_address and args.backend != "ray":
+        raise UserError("--ray-address needs --backend ray")
+    if args.backend == "ray":
+        from motion2robot.batch.ray_backend import import_ray
+
+        import_ray()
+    robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
+    read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
+                      read_options=read_options, robot=robot.name)
+    exp = plan.expansion
+    files = len({i.path for i in exp.items})
+    note = [f"{len(exp.items)} clips in {files} files"]
+    if exp.skipped:
+        names = ", ".join(os.path.basename(p) for p, _ in exp.skipped[:4])
+        note.append(f"{len(exp.skipped)} non-motion files skipped ({names})")
+    if plan.done:
+        note.append(f"{plan.done} already in {args.out} (resume; --redo to redo)")
+    if plan.dropped:
+        note.append(f"{plan.dropped} old rows removed")
+    if plan.bad_lines:
+        note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
+    print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
+    config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
+                         read_options=tuple(sorted(read_options.items())))
+    counts = {"ok": 0, "no": 0, "err": 0}
+    with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
+              dynamic_ncols=True, smoothing=0.05) as bar:
+        def on_row(row: dict) -> None:
+            counts["err" if row.get("error") else "ok" if row.get("feasible") else "no"] += 1
+            bar.set_postfix(executable=counts["ok"], not_exec=counts["no"], errors=counts["err"], refresh=False)
+            bar.update()
+
+        run_plan(plan, config, backend=args.backend, jobs=args.jobs, ray_address=args.ray_address,
+                 on_row=on_row, max_tasks_per_child=args.max_tasks_per_child)
+    keys = plan.keys
+    rows = [r for r in read_rows(args.out).rows if r["key"] in keys]
+    print(format_summary(summarize(rows), robot=robot.name))
+    return 0
