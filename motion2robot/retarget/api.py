@@ -5,14 +5,19 @@
    to touch the floor in contact frames; correct exactly onto the floor/self-collision
    constraints; clamp joint velocities;
 3. pin each contact phase's sole where step 2 put it when the phase began
-   (:mod:`~motion2robot.retarget.contacts`) and, with balance on, build the shrunk support
-   polygons; solve again from step 2's answer;
+   (:mod:`~motion2robot.retarget.contacts`), moving a phase that begins while the other foot is
+   pinned out of that foot's capsule (:mod:`~motion2robot.retarget.anchor_gap`) and, with balance
+   on, build the shrunk support polygons; solve again from step 2's answer;
 4. twice: smooth the hinge trajectories where their speed or acceleration exceed what the servo
    can do (:mod:`~motion2robot.retarget.smoothing`; rounded off instead of clamped into a
    bang-bang), Newton projection onto the hard constraints (contact, floor, balance,
    self-collision; each frame's hinges within the velocity limit of its neighbours), then the exact
-   joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`);
-5. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
+   joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`); up to REPAIR_ROUNDS more
+   such rounds while self-collision capsules still overlap (hinges at a velocity bound then free
+   to take part in the projection step);
+5. exact root pass (:mod:`~motion2robot.retarget.root_pass`): translate only the root so no sole
+   corner is below the floor and the stance sole does not slide (joint angles untouched);
+6. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
 """
 
 from __future__ import annotations
@@ -25,6 +30,8 @@ import numpy as np
 from motion2robot.errors import SolverError
 from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
+from motion2robot.retarget.anchor_gap import foot_capsules, separate_anchors
+from motion2robot.retarget.collision import MARGIN
 from motion2robot.retarget.compiled import CompiledProblem, compiled_problem
 from motion2robot.retarget.constraints import (
     MARGIN_FRACTION,
@@ -35,6 +42,7 @@ from motion2robot.retarget.constraints import (
 from motion2robot.retarget.contacts import anchor_soles, contact_labels
 from motion2robot.retarget.costs import FRAME_TERMS, Weights
 from motion2robot.retarget.problem import HMAX
+from motion2robot.retarget.root_pass import root_shift
 from motion2robot.retarget.scale import Scale, auto_scale, scaled_keypoints
 from motion2robot.retarget.smoothing import root_acceleration_target, servo_targets, smooth_hinges, smooth_to_targets
 from motion2robot.retarget.solver import correct, objective
@@ -44,6 +52,14 @@ from motion2robot.robot_motion import RobotMotion
 
 #: Factor on the floor weight in the first (free-feet) stage.
 STAGE1_SOFTENING = 1e-3
+#: Newton projections of the free-feet answer before the contact phases are anchored.
+ANCHOR_CORRECTIONS = 2
+#: m of clearance kept between the feet's capsules (besides the collision MARGIN) when anchoring.
+ANCHOR_CLEARANCE = 0.002
+#: Extra correction rounds at most, run while some self-collision capsule pair still overlaps by
+#: more than REPAIR_TOLERANCE (m).
+REPAIR_ROUNDS = 4
+REPAIR_TOLERANCE = 0.001
 
 
 @dataclass(frozen=True)
@@ -60,7 +76,8 @@ class RetargetOptions:
     baseline of :mod:`~motion2robot.retarget.baseline`, same costs). smoothing: round off the
     hinge trajectories to the speed/acceleration the servos can follow
     (:func:`~motion2robot.retarget.smoothing.servo_targets`) and, with balance on, the root's
-    acceleration (off = only the exact velocity clamp; faster motion, may fail the torque checks)."""
+    acceleration (off = only the exact velocity clamp; faster motion, may fail the torque checks).
+    root_pass: finish with the exact root translation pass (floor, stance sole pinned)."""
 
     balance: bool = True
     fps: float | None = None
@@ -73,6 +90,7 @@ class RetargetOptions:
     backend: str = "auto"
     solver: str = "fast"
     smoothing: bool = True
+    root_pass: bool = True
 
 
 def _points(problem: CompiledProblem, Q: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -81,12 +99,13 @@ def _points(problem: CompiledProblem, Q: np.ndarray) -> tuple[np.ndarray, ...]:
     return kp.reshape(T, -1, 3), corners.reshape(T, 2, 4, 3), com.reshape(T, 3), gaps.reshape(T, -1)
 
 
-def _residuals(problem: CompiledProblem, Q: np.ndarray, kp: np.ndarray, labels: np.ndarray, soles: np.ndarray | None,
-               planes: np.ndarray, balanced: np.ndarray) -> dict:
+def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.ndarray, labels: np.ndarray,
+               soles: np.ndarray | None, planes: np.ndarray, balanced: np.ndarray) -> dict:
     """Per-frame mean keypoint error (m) and constraint residuals (m: sole depth, contact z/slip,
-    CoM outside the shrunk polygon, capsule penetration), measured on the final trajectory."""
-    T = len(Q)
-    kp_r, corners, com, gaps = _points(problem, Q)
+    CoM outside the shrunk polygon, capsule penetration), measured on the final trajectory, whose
+    :func:`_points` are ``pts``."""
+    kp_r, corners, com, gaps = pts
+    T = len(kp_r)
     err = np.linalg.norm(kp_r - kp[:, [KP[k] for k in problem.spec.kp_names]], axis=-1).mean(axis=1)
     floor = np.maximum(0.0, -corners[..., 2].min(axis=(1, 2)))
     contact = np.zeros(T)
@@ -141,10 +160,14 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     w1 = replace(w, floor=w.floor * STAGE1_SOFTENING)
     Q, st1 = solve(problem, P1, q0, w1, opt.iterations[0], lo, hi)
     max_step = robot.velocity_limit / human.fps
-    Q, _ = correct(problem, P1, Q, lo, hi, None, 2)  # soles apart (and on the floor) before anchoring
+    Q, _ = correct(problem, P1, Q, lo, hi, None, ANCHOR_CORRECTIONS)  # soles apart (and on the floor) before anchoring
     Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)  # feasible start for stage 2
     _, corners, _, _ = _points(problem, Q)
     soles = anchor_soles(corners, labels) if opt.contacts else None
+    feet = foot_capsules(robot) if opt.contacts else None
+    anchor_push = 0.0
+    if feet is not None:  # phases anchored at different frames must not pin the feet into each other
+        soles, anchor_push = separate_anchors(soles, labels, *feet, MARGIN + ANCHOR_CLEARANCE)
     half = min(min(f.sole_half) for f in robot.config.feet)
     margin = opt.margin if opt.margin is not None else MARGIN_FRACTION * half
     planes = np.tile([0.0, 0.0, 1.0], (T, HMAX, 1))
@@ -155,17 +178,36 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     Q, st2 = solve(problem, P2, Q, w, opt.iterations[1], lo, hi)
     targets = servo_targets(robot)
     root_target = root_acceleration_target(robot) if opt.balance else None
-    for _ in range(opt.corrections):  # alternate: smooth within the servo's limits, then the hard constraints
+    rounds, pts = 0, None  # pts: _points of the current Q, when known
+    while rounds < opt.corrections + REPAIR_ROUNDS:  # alternate: smooth within the servo's limits, then the hard constraints
+        # past opt.corrections, more rounds only while the capsules still overlap
+        if rounds >= opt.corrections:
+            pts = _points(problem, Q) if rounds else None
+            if pts is None or pts[3].min(initial=0.0) >= -REPAIR_TOLERANCE:
+                break
+        rounds, pts = rounds + 1, None
         if opt.smoothing:
             Q[:, 7:] = smooth_hinges(Q[:, 7:], *targets, human.fps, robot.velocity_limit, lo, hi)
             if root_target is not None:  # quasi-static: the root's acceleration would move the ZMP
                 Q[:, :3] = smooth_to_targets(Q[:, :3], np.inf, root_target, human.fps)
-        Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2)
+        Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2, free_at_bounds=rounds > opt.corrections)
         Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)
+    pts = pts or _points(problem, Q)
+    shift = None
+    if opt.root_pass:  # joints final: move only the root onto the floor / stance anchors
+        shift = root_shift(pts[1], labels, human.fps, root_target if opt.smoothing else None)
+        Q[:, :3] += shift.shift
+        d = shift.shift  # a root translation moves every point by it; the capsule gaps stay
+        pts = (pts[0] + d[:, None], pts[1] + d[:, None, None], pts[2] + d, pts[3])
     solve_s = time.perf_counter() - t_solve
 
     terms, temporal = objective(problem, P2, Q, w)  # the final trajectory's objective (stage 2's)
-    figures = _residuals(problem, Q, kp, labels, soles, planes, support & opt.balance & opt.contacts)
+    # contact residual against each phase's placement in its first frame of the final trajectory
+    # (the root pass keeps the stance sole there, not at the solver's anchors)
+    final_soles = anchor_soles(pts[1], labels) if opt.contacts else None
+    if final_soles is not None and opt.balance and shift is not None:
+        planes = support_planes(final_soles, labels, margin)[0]
+    figures = _residuals(problem, pts, kp, labels, final_soles, planes, support & opt.balance & opt.contacts)
     total_s = time.perf_counter() - t_all
     meta = {
         "source": human.meta.get("source"), "clip": human.meta.get("clip"), "prompt": human.meta.get("prompt"),
@@ -177,10 +219,12 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
                        else "per-frame IPOPT (casadi nlpsol)"),
             "time_s": solve_s, "total_s": total_s, "frames_per_s": T / solve_s if solve_s > 0 else None,
             "compile_s": problem.compile_s, "build_s": problem.build_s, "compiled_from_cache": problem.cached,
-            "iterations": [st1.iterations, st2.iterations], **figures,
+            "iterations": [st1.iterations, st2.iterations], "correction_rounds": rounds, **figures,
             "objective": {"total": float(terms.sum() + temporal.sum()), "temporal": float(temporal.sum()),
                           **dict(zip(FRAME_TERMS, terms.sum(axis=0).tolist()))},
             "weights": w.as_dict(),
+            "anchor_push_m": anchor_push,
+            "root_pass": shift.figures() if shift is not None else None,
             "smoothing": ({"speed_target_rad_s": targets[0].tolist(), "acceleration_target_rad_s2": targets[1].tolist(),
                            "root_acceleration_target_m_s2": root_target} if opt.smoothing else None),
         },

@@ -2,10 +2,12 @@
 bounding box (body frame) of the body's collision geoms, radius the larger cross half-extent
 (for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
 for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
-right leg, each arm vs the torso, each hand (the wrist keypoint's body and below) vs every body
+right leg, the two arms, each arm vs the torso, each hand (the wrist keypoint's body and below) vs every body
 of its own leg.
 
-Pairs of a body and its parent, and pairs already touching at the nominal posture, are left out
+Boxes get a capsule containing them (over the whole length, radius the cross
+half-diagonal) unless that capsule already touches the other one at the nominal posture, when the
+inscribed capsule is used. Pairs of a body and its parent, and pairs already touching at the nominal posture, are left out
 (overlaps of the model's hulls by design); pairs the nominal posture holds closer than
 :data:`NOMINAL_CLEARANCE` get that much clearance at the nominal posture (their capsules overstate
 the hulls). Capsule distance = segment distance - radii (exact);
@@ -23,16 +25,16 @@ import numpy as np
 from motion2robot.robot.kinematics import quat_to_mat_np
 from motion2robot.robot.robot import Robot
 
-#: Capsules kept per limb: the largest bodies (legs: thigh, shin, foot; arms: upper arm, forearm;
-#: hand: the wrist keypoint's body and below).
-LIMB_BODIES = {"leg": 3, "arm": 2, "torso": 1, "hand": 2}
+#: Capsules kept per limb: the largest bodies (legs: thigh, shin, foot, ankle and hip-roll links;
+#: arms: upper arm, forearm; hand: the wrist keypoint's body and below).
+LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 1, "hand": 2}
 #: Pairs closer than this (m) at the nominal posture get this much clearance there (see CapsulePair).
-NOMINAL_CLEARANCE = 0.01
+NOMINAL_CLEARANCE = 0.02
 #: A box whose long half-extent is this many times its cross half-extent is "elongated".
 ELONGATED = 1.5
 #: Extra clearance (m) kept between capsules (box corners stick out of their capsule a little).
 MARGIN = 0.003
-_ROUND = (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CYLINDER)
+_ROUND = {int(mujoco.mjtGeom.mjGEOM_CAPSULE), int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CYLINDER)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,9 +67,10 @@ def _geom_box(m: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
     return pts.min(axis=0), pts.max(axis=0)
 
 
-def body_capsules(m: mujoco.MjModel) -> dict[int, BodyCapsule]:
+def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCapsule]:
     """Each body's capsule: along the longest axis of the union of its collision geoms' bounding
-    boxes (body frame), radius the larger cross half-extent."""
+    boxes (body frame), radius the larger cross half-extent; with ``contain``, boxes and meshes get the
+    capsule over their whole length with the cross half-diagonal as radius (it holds the corners)."""
     boxes: dict[int, list] = {}
     rounded: dict[int, bool] = {}
     for g in range(m.ngeom):
@@ -75,7 +78,7 @@ def body_capsules(m: mujoco.MjModel) -> dict[int, BodyCapsule]:
             continue
         b = int(m.geom_bodyid[g])
         boxes.setdefault(b, []).append(_geom_box(m, g))
-        rounded[b] = rounded.get(b, True) and m.geom_type[g] in _ROUND
+        rounded[b] = rounded.get(b, True) and int(m.geom_type[g]) in _ROUND
     out = {}
     for b, bs in boxes.items():
         lo = np.min([x[0] for x in bs], axis=0)
@@ -83,9 +86,12 @@ def body_capsules(m: mujoco.MjModel) -> dict[int, BodyCapsule]:
         centre, half = (lo + hi) / 2, (hi - lo) / 2
         i = int(np.argmax(half))
         radius = float(np.max(np.delete(half, i)))
-        # capsules/spheres, and chunky boxes: the inscribed-length capsule; elongated boxes and
-        # meshes (a sole): a capsule over the whole length, so their corners stay inside it
-        long = not rounded[b] and half[i] >= ELONGATED * radius
+        # chunky bodies: the inscribed-length capsule; elongated ones (a sole, a limb's capsule
+        # geom): a capsule over the whole bounding-box length (for a capsule geom, longer than
+        # it by its radius at each end: on the safe side)
+        long = half[i] >= ELONGATED * radius
+        if contain and not rounded[b]:  # boxes/meshes: a capsule containing the box's corners
+            radius, long = float(np.linalg.norm(np.delete(half, i))), True
         axis = np.eye(3)[i] * (float(half[i]) if long else max(float(half[i]) - radius, 0.0))
         out[b] = BodyCapsule(b, centre - axis, centre + axis, radius)
     return out
@@ -146,6 +152,7 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
     """Capsule pairs to keep apart (see the module docstring)."""
     m = robot.model
     caps = body_capsules(m)
+    outer = body_capsules(m, contain=True)
     whole = _limbs(robot)
     limbs = {k: _largest(v, caps, LIMB_BODIES.get(k.split("_")[-1], 1)) for k, v in whole.items()}
     groups = [("left_leg", "right_leg")]
@@ -153,6 +160,8 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
         if f"{side}_arm" in limbs:
             limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
             groups += [(f"{side}_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
+    if "left_arm" in limbs and "right_arm" in limbs:
+        groups.append(("left_arm", "right_arm"))
     d = robot.new_data()
 
     def world(c: BodyCapsule):
@@ -165,8 +174,11 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
             for b in limbs.get(gb, []):
                 if a not in caps or b not in caps or m.body_parentid[a] == b or m.body_parentid[b] == a:
                     continue
-                ca_, cb = caps[a], caps[b]
-                clearance = _gap_np(world(ca_), world(cb)) - ca_.radius - cb.radius - MARGIN
+                # the containing capsules, unless they touch at the nominal posture (then the inscribed ones)
+                for ca_, cb in ((outer[a], outer[b]), (caps[a], caps[b])):
+                    clearance = _gap_np(world(ca_), world(cb)) - ca_.radius - cb.radius - MARGIN
+                    if clearance > 0:
+                        break
                 if clearance <= 0:
                     continue  # touching at the nominal posture: by design
                 name = f"{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, a)}-{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)}"

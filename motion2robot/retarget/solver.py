@@ -28,6 +28,10 @@ from motion2robot.retarget.problem import apply_step, tangent_diff
 
 #: Largest change of any state coordinate in one correction step (rad, or m / leg length).
 MAX_CORRECTION = 0.2
+#: Factor on a correction step that made its frame's violation worse, for the retry.
+BACKTRACK = 0.3
+#: rad the projection's bounds are widened by when hinges at a bound may move (see ``correct``).
+FREE_SLACK = 1e-6
 
 
 @dataclass(frozen=True)
@@ -143,28 +147,36 @@ def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.nd
 
 
 def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-            max_step: np.ndarray | None, iterations: int) -> tuple[np.ndarray, np.ndarray]:
+            max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Newton projection onto the hard constraints (see ``project`` in
     :mod:`motion2robot.retarget.problem`), ``iterations`` times; hinges stay in their per-frame
-    bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation."""
+    bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation.
+
+    free_at_bounds: hinges at a bound take part in the step too (the projection holds them
+    otherwise), the step being clipped into the bounds afterwards; for frames stuck with every
+    useful hinge at a velocity bound."""
     T, nv = Q.shape[0], problem.spec.nv
     n = nv - 6
     proj = problem.project_eval(T)
     lm = np.zeros((T, 1 + 2 * nv + 2 * n))
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
+    dx_prev = np.zeros((T, nv))
     for _ in range(iterations + 1):
         lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo
-        lm[:, 1 + 2 * nv + n:] = hi
+        slack = FREE_SLACK if free_at_bounds else 0.0
+        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo - slack
+        lm[:, 1 + 2 * nv + n:] = hi + slack
         dx, v = proj(Q, params, lm)
         v = v[:, 0]
-        worse = v > v_prev  # a step that did not help (infeasible target): keep the frame as it was
-        Q[worse], v[worse], dx[worse] = Q_prev[worse], v_prev[worse], 0.0
+        # a step that did not help (a far linearisation, or an infeasible target): put the frame
+        # back and retry a shorter step in the same direction
+        worse = v > v_prev
+        Q[worse], v[worse], dx[worse] = Q_prev[worse], v_prev[worse], BACKTRACK * dx_prev[worse]
         if _ == iterations:
             break
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
-        Q_prev, v_prev = Q.copy(), v
+        Q_prev, v_prev, dx_prev = Q.copy(), v, dx.copy()
         Q = apply_step(Q, dx)
         Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
     return Q, v_prev
