@@ -18,6 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from motion2robot.errors import InputFileError
+from motion2robot.util.jsonable import plain
 
 NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
 
@@ -90,7 +91,7 @@ class RobotMotion:
             fps=np.float64(self.fps),
             joint_names=np.array(self.joint_names, dtype=str),
             robot=np.array(self.robot, dtype=str),
-            meta=np.array(json.dumps(dict(self.meta), default=_json_default), dtype=str),
+            meta=np.array(json.dumps(plain(self.meta)), dtype=str),
         )
         tmp.replace(path)
         return path
@@ -127,16 +128,6 @@ class RobotMotion:
             bad = np.where(~np.all(np.isfinite(qpos), axis=1))[0]
             raise InputFileError(f"{path}: qpos has NaN/inf in frames {_ranges(bad)}; retarget again")
         return cls(qpos=qpos, fps=fps, joint_names=names, robot=robot, meta=meta)
-
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")
 
 
 def _ranges(idx: np.ndarray, limit: int = 6) -> str:

@@ -19,9 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
-import numpy as np
-
 from motion2robot.errors import InputFileError, UserError
+from motion2robot.util.jsonable import plain
 
 try:
     import fcntl
@@ -29,33 +28,9 @@ except ImportError:  # pragma: no cover - Windows: no advisory lock
     fcntl = None  # type: ignore[assignment]
 
 
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, (set, tuple)):
-        return list(obj)
-    return str(obj)
-
-
-def _finite(obj: Any) -> Any:
-    """Replace NaN/inf (not valid JSON) by None, recursively."""
-    if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    return obj
-
-
 def dumps_row(row: dict[str, Any]) -> str:
     """One JSON line (no newline) with numpy values converted and NaN/inf as null."""
-    plain = json.loads(json.dumps(row, default=_json_default))
-    return json.dumps(_finite(plain), ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    return json.dumps(plain(row, fallback_str=True), ensure_ascii=False, separators=(",", ":"), allow_nan=False)
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    from motion2robot.cli.cmd_inspect import add_read_options
+    from motion2robot.cli.read_options import add_read_options
 
     add_read_options(p)
     p.set_defaults(func=run)
@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
-    from motion2robot.cli.cmd_inspect import read_args_kwargs
+    from motion2robot.cli.read_options import read_args_kwargs
     from motion2robot.errors import UserError
     from motion2robot.robot import load_robot
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motion2robot.cli.cmd_inspect import add_read_options, read_args_kwargs
+from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.errors import InputFileError, UserError
 from motion2robot.robot_motion import NPZ_KEYS
 

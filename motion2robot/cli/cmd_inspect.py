@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.errors import InputFileError
 
 
@@ -19,26 +20,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", metavar="OUT.png", help="draw the skeleton at a few frames and the root path")
     add_read_options(p)
     p.set_defaults(func=run)
-
-
-def add_read_options(p: argparse.ArgumentParser) -> None:
-    """The reader options shared by every command that reads human motion."""
-    from motion2robot.motion.read import FORMATS
-
-    p.add_argument("--format", choices=FORMATS, help="override format detection")
-    p.add_argument("--source-fps", dest="fps", type=float, metavar="FPS",
-                   help="override the frame rate the file declares (e.g. 20 for IK-made BVH files that say 24)")
-    p.add_argument("--mean", help="Mean.npy for normalised 263-d features")
-    p.add_argument("--std", help="Std.npy for normalised 263-d features")
-    p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")
-    p.add_argument("--up", choices=["x", "y", "z", "-x", "-y", "-z"], help="override up-axis detection")
-    p.add_argument("--name-map", dest="name_map", help="TOML map of BVH joint names to SMPL22 keypoints")
-    p.add_argument("--skeleton", metavar="FILE.asf",
-                   help="ASF skeleton of an .amc motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc)")
-
-
-def read_args_kwargs(args: argparse.Namespace) -> dict:
-    return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton")}
 
 
 def describe(m, index: int, total: int) -> str:

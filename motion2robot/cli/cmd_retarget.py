@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from motion2robot.cli.cmd_inspect import add_read_options, read_args_kwargs
+from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.errors import InputFileError, UserError
 
 

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 from motion2robot.cli.cmd_check import is_robot_motion
-from motion2robot.cli.cmd_inspect import add_read_options, read_args_kwargs
+from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.errors import InputFileError, UserError
 from motion2robot.viz.camera import MODES
 from motion2robot.viz.gl import prefer_headless

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from motion2robot.util.jsonable import plain
+
 #: Checks in report order; ``trajectory`` is a figure and never decides the verdict.
 CHECK_NAMES = ("joint_limits", "velocity_limits", "acceleration", "torque_limits", "self_collision",
                "ground", "balance", "rollout", "trajectory")
@@ -40,7 +42,7 @@ class FeasibilityReport:
 
     def to_dict(self) -> dict:
         """JSON-serialisable content (no series)."""
-        return _plain({"feasible": self.feasible, "checks": self.checks, "reasons": self.reasons,
+        return plain({"feasible": self.feasible, "checks": self.checks, "reasons": self.reasons,
                        "figures": self.figures, "robot": self.robot, "fps": self.fps, "frames": self.frames})
 
     def to_json(self, path: str | Path) -> Path:
@@ -55,18 +57,3 @@ def verdict(checks: dict[str, dict]) -> bool:
     return all(c["ok"] for n, c in checks.items() if n in VERDICT_CHECKS and not c.get("skipped"))
 
 
-def _plain(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, (np.bool_, bool)):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, (np.floating, float)):
-        f = float(obj)
-        return f if np.isfinite(f) else None
-    return obj
