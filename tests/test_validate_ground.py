@@ -50,6 +50,20 @@ def test_feet_sliding_on_the_floor_is_skating(op3):
     assert out["max_penetration_m"] < 1e-3
 
 
+def test_contact_labels_decide_skating_from_a_low_swing(op3):
+    """With labels, a foot moving fast just above the floor while labelled in the air is a low
+    swing (scuff risk, not a verdict); the same foot labelled in contact is skating."""
+    q = examples.standing(op3).qpos.copy()
+    q[:, 0] += 0.4 * np.arange(len(q)) / 50.0
+    swing = np.zeros((len(q), 2), dtype=bool)
+    swing_out = ground(ctx_of(op3, q, meta={"contacts": swing.tolist()}))
+    assert swing_out["ok"] and swing_out["skating"] == []
+    assert swing_out["low_swing_frames"] and swing_out["low_swing_frames"][0] <= 2
+    stance = ~swing
+    stance_out = ground(ctx_of(op3, q, meta={"contacts": stance.tolist()}))
+    assert not stance_out["ok"] and {v["foot"] for v in stance_out["skating"]} == {"left", "right"}
+
+
 def test_balance_flags_flight_and_reports_margins(op3):
     q = examples.standing(op3).qpos.copy()
     q[10:15, 2] += 0.03

@@ -3,8 +3,11 @@
 - penetration: any robot geom deeper than ``ground_depth`` into the floor (from the contacts of
   the check model), or a sole corner lower than ``-ground_depth`` (a foot's geoms and its sole
   corners are reported together as "left foot" / "right foot");
-- skating: a sole corner within ``contact_height`` of the floor moving horizontally faster than
-  ``skate_speed`` for at least ``min_run`` frames (a foot sliding or scuffing);
+- skating: a foot in contact moving horizontally faster than ``skate_speed`` for at least
+  ``min_run`` frames. "In contact" is the motion's contact label (retargeted motions carry the
+  labels they were solved with) AND a sole corner within ``contact_height`` of the floor; without
+  labels, any corner that low counts. A swing foot passing low over the floor without a contact
+  label is not skating: it is reported as ``low_swing_frames`` (a scuff risk, figures only);
 - non-foot contacts (figures only): bodies other than the feet touching the floor.
 """
 
@@ -54,7 +57,10 @@ def ground(ctx: Context) -> dict:
     pen_frames |= corner_z.min(axis=(1, 2)) < -opts.ground_depth
 
     speed = np.linalg.norm(ctx.kin.corner_vel[..., :2], axis=-1)  # (T, 2, 4)
-    sliding = keep_runs((ctx.low & (speed > opts.skate_speed)).any(axis=2), opts.min_run)  # (T, 2)
+    fast_low = ctx.low & (speed > opts.skate_speed)
+    in_contact = fast_low if ctx.labels is None else fast_low & ctx.labels[:, :, None]
+    sliding = keep_runs(in_contact.any(axis=2), opts.min_run)  # (T, 2)
+    low_swing = keep_runs((fast_low & ~in_contact).any(axis=2), opts.min_run)
     skating = []
     for k, side in enumerate(SIDES):
         if sliding[:, k].any():
@@ -72,4 +78,5 @@ def ground(ctx: Context) -> dict:
     return {"ok": not bad.any(), "frames": frame_list(bad),
             "max_penetration_m": round(max_pen, 4),
             "skating_frames": frame_list(sliding), "penetrations": pen, "skating": skating,
+            "low_swing_frames": frame_list(low_swing.any(axis=1)),
             "non_foot_contacts": non_foot}
