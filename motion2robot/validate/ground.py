@@ -58,9 +58,17 @@ def ground(ctx: Context) -> dict:
 
     speed = np.linalg.norm(ctx.kin.corner_vel[..., :2], axis=-1)  # (T, 2, 4)
     fast_low = ctx.low & (speed > opts.skate_speed)
-    in_contact = fast_low if ctx.labels is None else fast_low & ctx.labels[:, :, None]
+    if ctx.labels is None:
+        in_contact = fast_low
+    else:
+        # While labelled in contact, the speed is measured between contact frames only: the
+        # central difference at a touchdown or lift-off frame mixes in the swing.
+        speed = np.where(ctx.labels[:, :, None], _contact_speed(ctx.kin.corners, ctx.labels, ctx.motion.fps), speed)
+        in_contact = ctx.low & (speed > opts.skate_speed) & ctx.labels[:, :, None]
     sliding = keep_runs(in_contact.any(axis=2), opts.min_run)  # (T, 2)
     low_swing = keep_runs((fast_low & ~in_contact).any(axis=2), opts.min_run)
+    if ctx.labels is not None:
+        low_swing &= ~ctx.labels
     skating = []
     for k, side in enumerate(SIDES):
         if sliding[:, k].any():
@@ -80,3 +88,16 @@ def ground(ctx: Context) -> dict:
             "skating_frames": frame_list(sliding), "penetrations": pen, "skating": skating,
             "low_swing_frames": frame_list(low_swing.any(axis=1)),
             "non_foot_contacts": non_foot}
+
+
+def _contact_speed(corners: np.ndarray, labels: np.ndarray, fps: float) -> np.ndarray:
+    """(T, 2, 4) horizontal corner speed (m/s) from differences between consecutive frames that
+    are both labelled in contact (the larger of the backward and forward step); 0 for a contact
+    phase of one frame."""
+    step = np.linalg.norm(np.diff(corners[..., :2], axis=0), axis=-1) * fps  # (T-1, 2, 4)
+    both = (labels[1:] & labels[:-1])[:, :, None]
+    step = np.where(both, step, 0.0)
+    out = np.zeros(corners.shape[:3])
+    out[1:] = step
+    out[:-1] = np.maximum(out[:-1], step)
+    return out
