@@ -27,6 +27,8 @@ def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions
     if t < 2:
         raise fail(path, f"has {t} frame{'s' if t != 1 else ''}, a motion needs at least 2",
                    "export a longer clip")
+    if np.isfinite(positions).all():  # the common case: one pass, no per-frame reduction
+        return
     bad = ~np.isfinite(positions.reshape(t, -1)).all(axis=1)
     if bad.any():
         idx = np.flatnonzero(bad)

@@ -13,16 +13,16 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
-from numpy.lib import format as npformat
 
 from motion2robot.motion import read_arrays as R
 from motion2robot.motion.checks import fail
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
-from motion2robot.motion.safe_pickle import load_npy, restricted_load
+from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header, restricted_load
 
 FORMATS = ("humanml3d_joints", "humanml3d_vecs", "kit_vecs", "mdm_results", "mdm_array", "bvh",
            "npz", "pt", "amass", "aistpp_smpl", "asf_amc")
+_NPY_FORMATS = ("humanml3d_joints", "humanml3d_vecs", "kit_vecs", "mdm_array", "mdm_results")
 _MOTION_SUFFIXES = (".npy", ".npz", ".bvh", ".pt", ".amc")
 _SMPL_REFUSAL = ("holds SMPL body-model parameters (axis-angle poses); turning them into joint "
                  "positions needs the licence-restricted SMPL/SMPL-H model files, which are not shipped",
@@ -31,19 +31,8 @@ _SMPL_REFUSAL = ("holds SMPL body-model parameters (axis-angle poses); turning t
 
 def _npy_shape(path: Path) -> tuple[tuple[int, ...], np.dtype]:
     with open(path, "rb") as fh:
-        if fh.read(6) != b"\x93NUMPY":
-            if path.stat().st_size == 0:
-                raise fail(path, "is empty (0 bytes)", "re-export or re-download the file")
-            raise fail(path, "is not a numpy .npy file (no NUMPY magic bytes)",
-                       "give a .npy saved with numpy.save, or pass --format")
-        fh.seek(0)
-        try:
-            version = npformat.read_magic(fh)
-            reader = npformat.read_array_header_1_0 if version == (1, 0) else npformat.read_array_header_2_0
-            shape, _, dtype = reader(fh)
-        except ValueError as err:
-            raise fail(path, f"has a broken .npy header ({err})", "re-export the file") from None
-    return shape, dtype
+        header = read_npy_header(path, fh)
+    return header.shape, header.dtype
 
 
 def _format_of_shape(path: Path, shape: tuple[int, ...], dtype: np.dtype) -> str:
@@ -127,17 +116,50 @@ def _read_pkl(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     raise fail(path, f"holds a {type(obj).__name__}, not a known motion pickle", "pass --format")
 
 
+def _read_npy_content(path: Path, fmt: str, arr: Any, opts: ReadOptions) -> list[HumanMotion]:
+    if fmt == "mdm_results":
+        return R.read_mdm_results(path, arr, opts)
+    if not isinstance(arr, np.ndarray):
+        raise fail(path, f"holds a {type(arr).__name__}, not an array", "give a numeric .npy")
+    reader = {"humanml3d_joints": R.read_joints, "humanml3d_vecs": R.read_features,
+              "kit_vecs": R.read_features, "mdm_array": R.read_mdm_array}[fmt]
+    return reader(path, arr, opts)
+
+
+def _read_npy_once(path: Path, fmt: str | None, opts: ReadOptions) -> list[HumanMotion] | None:
+    """Fast path for .npy motion: one open, one header parse, one read. None when the file is not
+    a .npy holding one of the numpy formats (the caller then takes the general path, which gives
+    the same answers and errors)."""
+    if fmt not in (None, *_NPY_FORMATS) or (fmt is None and path.suffix.lower() in (".bvh", ".asf", ".amc")):
+        return None
+    try:
+        fh = open(path, "rb")
+    except OSError:  # missing, a directory, unreadable: the general path says which
+        return None
+    with fh:
+        if fh.read(6) != b"\x93NUMPY":
+            return None
+        fh.seek(0)
+        header = read_npy_header(path, fh)
+        fmt = fmt or _format_of_shape(path, header.shape, header.dtype)
+        if fmt not in _NPY_FORMATS:
+            return None
+        arr = read_npy_data(path, fh, header)
+    return _read_npy_content(path, fmt, arr, opts)
+
+
+def _read_path(path: Path, fmt: str | None, opts: ReadOptions,
+               skeleton: str | Path | None = None) -> list[HumanMotion]:
+    fast = _read_npy_once(path, fmt, opts)
+    if fast is not None:
+        return fast
+    return _read_file(path, fmt or detect_format(path), opts, skeleton)
+
+
 def _read_file(path: Path, fmt: str, opts: ReadOptions,
                skeleton: str | Path | None = None) -> list[HumanMotion]:
-    if fmt in ("humanml3d_joints", "humanml3d_vecs", "kit_vecs", "mdm_array", "mdm_results"):
-        arr = load_npy(path)
-        if fmt == "mdm_results":
-            return R.read_mdm_results(path, arr, opts)
-        if not isinstance(arr, np.ndarray):
-            raise fail(path, f"holds a {type(arr).__name__}, not an array", "give a numeric .npy")
-        reader = {"humanml3d_joints": R.read_joints, "humanml3d_vecs": R.read_features,
-                  "kit_vecs": R.read_features, "mdm_array": R.read_mdm_array}[fmt]
-        return reader(path, arr, opts)
+    if fmt in _NPY_FORMATS:
+        return _read_npy_content(path, fmt, load_npy(path), opts)
     if fmt == "bvh":
         from motion2robot.motion.read_bvh import read_bvh
         return read_bvh(path, opts)
@@ -173,6 +195,10 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
     path = Path(path)
     if format is not None and format not in FORMATS:
         raise fail(path, f"unknown --format {format!r}", f"use one of {', '.join(FORMATS)}")
+    opts = ReadOptions(clip, fps, mean, std, units, up, name_map)
+    fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
+    if fast is not None:
+        return fast
     if path.is_dir():
         if path.suffix.lower() in _MOTION_SUFFIXES:
             raise fail(path, "is a directory, not a motion file", "give the file itself")
@@ -184,10 +210,9 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
         sub = ReadOptions(None, fps, mean, std, units, up, name_map)
         out = []
         for i, f in enumerate(picked):
-            for m in _read_file(f, format or detect_format(f), sub, skeleton):
+            for m in _read_path(f, format, sub, skeleton):
                 out.append(m.with_(meta={"clip": clip if clip is not None else i, "folder": str(path)}))
         return out
     if not path.exists():
         raise fail(path, "does not exist", "check the path")
-    opts = ReadOptions(clip, fps, mean, std, units, up, name_map)
     return _read_file(path, format or detect_format(path), opts, skeleton)

@@ -9,9 +9,14 @@ refused with an :class:`~motion2robot.errors.InputFileError` before it is looked
 from __future__ import annotations
 
 import collections
+import io
+import math
+import os
 import pickle
+import re
+import tokenize
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO, NamedTuple
 
 import numpy as np
 from numpy.lib import format as npformat
@@ -83,34 +88,108 @@ def restricted_load(path: str | Path, fh: Any) -> Any:
                    "check the file is complete and was saved with numpy/pickle") from None
 
 
+class NpyHeader(NamedTuple):
+    """What a .npy header says: array shape, Fortran order, dtype, and where the data starts."""
+
+    shape: tuple[int, ...]
+    fortran_order: bool
+    dtype: np.dtype
+    data_offset: int
+
+
+#: The header dict exactly as numpy.save writes it; anything else goes through numpy's parser.
+_HEADER_RE = re.compile(r"\{'descr': '([^']+)', 'fortran_order': (True|False), 'shape': \(([0-9, ]*)\), \} *\n?")
+_MAGIC = b"\x93NUMPY"
+
+
+def _fast_header(text: str) -> tuple[tuple[int, ...], bool, np.dtype] | None:
+    m = _HEADER_RE.fullmatch(text)
+    if m is None:
+        return None
+    try:
+        shape = tuple(int(s) for s in m.group(3).split(",") if s.strip())
+        dtype = np.dtype(m.group(1))
+    except (TypeError, ValueError):
+        return None
+    if m.group(3).strip() and len(shape) == 1 and not m.group(3).rstrip().endswith(","):
+        return None  # "(5)" is not a tuple: let numpy's parser refuse it
+    return shape, m.group(2) == "True", dtype
+
+
+def read_npy_header(path: str | Path, fh: BinaryIO) -> NpyHeader:
+    """Parse the .npy header of an open binary file positioned at its start, leaving the file at
+    the first data byte. The header is parsed once; numpy.save's own layout takes a fast path,
+    any other valid header goes through numpy's parser. Raises InputFileError on a bad header."""
+    lead = fh.read(12)
+    if lead[:6] != _MAGIC:
+        if not lead:
+            raise fail(path, "is empty (0 bytes)", "re-export or re-download the file")
+        raise fail(path, "is not a numpy .npy file (no NUMPY magic bytes)",
+                   "give a .npy saved with numpy.save, or pass --format")
+    version = (lead[6], lead[7]) if len(lead) >= 8 else None
+    if version == (1, 0) and len(lead) >= 10:
+        hlen, start = int.from_bytes(lead[8:10], "little"), 10
+    elif version == (2, 0) and len(lead) >= 12:
+        hlen, start = int.from_bytes(lead[8:12], "little"), 12
+    else:
+        hlen = start = -1
+    parsed = None
+    if hlen >= 0:
+        raw = lead[start:] + fh.read(hlen - (len(lead) - start))
+        if len(raw) == hlen:
+            try:
+                parsed = _fast_header(raw.decode("latin1"))
+            except UnicodeDecodeError:  # pragma: no cover - latin1 decodes any byte
+                parsed = None
+    if parsed is not None:
+        return NpyHeader(*parsed, start + hlen)
+    fh.seek(0)
+    try:
+        version = npformat.read_magic(fh)
+        if version == (1, 0):
+            shape, fortran, dtype = npformat.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, fortran, dtype = npformat.read_array_header_2_0(fh)
+        else:
+            raise ValueError(f"unsupported .npy version {version}")
+    except (ValueError, SyntaxError, tokenize.TokenError) as err:
+        raise fail(path, f"has a broken .npy header ({err})", "re-export the file") from None
+    return NpyHeader(tuple(shape), bool(fortran), dtype, fh.tell())
+
+
+def read_npy_data(path: str | Path, fh: BinaryIO, header: NpyHeader) -> Any:
+    """The content after :func:`read_npy_header`: a writable numeric ndarray, or for object arrays
+    the restricted-unpickled content (a 0-d object array becomes its item, e.g. MDM's dict)."""
+    if header.dtype.hasobject:
+        obj = restricted_load(path, fh)
+        if isinstance(obj, np.ndarray) and obj.dtype.hasobject and obj.shape == ():
+            return obj.item()
+        return obj
+    shape = header.shape
+    count = math.prod(shape)
+    nbytes = count * header.dtype.itemsize
+    try:  # a truncated file or a header claiming a huge shape: refuse before allocating
+        avail = os.fstat(fh.fileno()).st_size - fh.tell()
+    except (AttributeError, OSError, io.UnsupportedOperation):
+        avail = nbytes
+    buf = bytearray(nbytes if avail >= nbytes else 0)
+    got = fh.readinto(buf) if len(buf) else 0
+    if got != nbytes:
+        raise fail(path, f"is a damaged .npy file (truncated: its header promises {shape} {header.dtype} = "
+                         f"{nbytes} bytes of data, the file holds {got if len(buf) else avail})",
+                   "re-export or re-download it")
+    try:
+        arr = np.frombuffer(buf, dtype=header.dtype, count=count)
+    except ValueError as err:  # e.g. a zero-size dtype
+        raise fail(path, f"is a damaged .npy file ({err})", "re-export or re-download it") from None
+    if header.fortran_order:
+        return arr.reshape(shape[::-1]).transpose()
+    return arr.reshape(shape)
+
+
 def load_npy(path: str | Path) -> Any:
     """Read a .npy file: a numeric ndarray, or for object arrays the restricted-unpickled content
     (a 0-d object array becomes its item, e.g. MDM's dict)."""
     path = Path(path)
     with open(path, "rb") as fh:
-        head = fh.read(6)
-        if not head:
-            raise fail(path, "is empty (0 bytes)", "re-export or re-download the file")
-        if head != b"\x93NUMPY":
-            raise fail(path, "is not a numpy .npy file (no NUMPY magic bytes)",
-                       "give a .npy saved with numpy.save, or pass --format")
-        fh.seek(0)
-        try:
-            version = npformat.read_magic(fh)
-            if version == (1, 0):
-                shape, fortran, dtype = npformat.read_array_header_1_0(fh)
-            elif version == (2, 0):
-                shape, fortran, dtype = npformat.read_array_header_2_0(fh)
-            else:
-                raise ValueError(f"unsupported .npy version {version}")
-        except ValueError as err:
-            raise fail(path, f"has a broken .npy header ({err})", "re-export the file") from None
-        if dtype.hasobject:
-            obj = restricted_load(path, fh)
-            if isinstance(obj, np.ndarray) and obj.dtype.hasobject and obj.shape == ():
-                return obj.item()
-            return obj
-    try:
-        return np.load(path, allow_pickle=False)
-    except (ValueError, EOFError, OSError) as err:
-        raise fail(path, f"is a damaged .npy file ({err})", "re-export or re-download it") from None
+        return read_npy_data(path, fh, read_npy_header(path, fh))
