@@ -15,8 +15,9 @@
    joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`); up to REPAIR_ROUNDS more
    such rounds while self-collision capsules still overlap (hinges at a velocity bound then free
    to take part in the projection step);
-5. exact root pass (:mod:`~motion2robot.retarget.root_pass`): translate only the root so no sole
-   corner is below the floor and the stance sole does not slide (joint angles untouched);
+5. exact root pass (:mod:`~motion2robot.retarget.root_pass`): rotate the root about the vertical
+   and translate it so no sole corner is below the floor and the stance sole neither slides nor
+   spins (joint angles untouched);
 6. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
 """
 
@@ -77,7 +78,8 @@ class RetargetOptions:
     hinge trajectories to the speed/acceleration the servos can follow
     (:func:`~motion2robot.retarget.smoothing.servo_targets`) and, with balance on, the root's
     acceleration (off = only the exact velocity clamp; faster motion, may fail the torque checks).
-    root_pass: finish with the exact root translation pass (floor, stance sole pinned)."""
+    root_pass: finish with the exact root pass (a yaw and a translation of the root only: floor,
+    stance sole pinned and not spinning)."""
 
     balance: bool = True
     fps: float | None = None
@@ -196,9 +198,8 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     shift = None
     if opt.root_pass:  # joints final: move only the root onto the floor / stance anchors
         shift = root_shift(pts[1], labels, human.fps, root_target if opt.smoothing else None)
-        Q[:, :3] += shift.shift
-        d = shift.shift  # a root translation moves every point by it; the capsule gaps stay
-        pts = (pts[0] + d[:, None], pts[1] + d[:, None, None], pts[2] + d, pts[3])
+        Q = shift.apply(Q)  # a rigid root motion moves every point with it; the capsule gaps stay
+        pts = (shift.points(pts[0]), shift.points(pts[1]), shift.points(pts[2][:, None])[:, 0], pts[3])
     solve_s = time.perf_counter() - t_solve
 
     terms, temporal = objective(problem, P2, Q, w)  # the final trajectory's objective (stage 2's)
