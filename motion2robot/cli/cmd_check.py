@@ -7,14 +7,9 @@ readers accept, which is retargeted first. Exit code 0 feasible, 1 infeasible, 2
 from __future__ import annotations
 
 import argparse
-import zipfile
-from pathlib import Path
 
-import numpy as np
-
-from motion2robot.cli.read_options import add_read_options, read_args_kwargs
-from motion2robot.errors import InputFileError, UserError
-from motion2robot.robot_motion import NPZ_KEYS
+from motion2robot.cli.motion_input import load_motion_input
+from motion2robot.cli.read_options import add_read_options
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -36,43 +31,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def is_robot_motion(path: Path) -> bool:
-    """True for an .npz holding the RobotMotion keys."""
-    if path.suffix.lower() != ".npz" or not path.is_file():
-        return False
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return all(k in z.files for k in NPZ_KEYS)
-    except (OSError, ValueError, zipfile.BadZipFile):
-        return False
-
-
-def load_for_check(args: argparse.Namespace):
-    """(motion, robot) for the file: a RobotMotion as is, or human motion retargeted."""
-    from motion2robot.robot import load_robot
-    from motion2robot.robot_motion import RobotMotion
-
-    path = Path(args.file)
-    if is_robot_motion(path):
-        motion = RobotMotion.load(path)
-        robot = load_robot(args.robot or motion.robot)
-        return motion, robot
-    from motion2robot.motion import read_motion
-    from motion2robot.retarget import retarget
-
-    clips = read_motion(path, clip=args.clip, **read_args_kwargs(args))
-    if not clips:
-        raise InputFileError(f"{path}: no motion clip found; check the file")
-    if len(clips) > 1:
-        raise UserError(f"{path}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1}")
-    robot = load_robot(args.robot or "op3")
-    return retarget(clips[0], robot), robot
-
-
 def run(args: argparse.Namespace) -> int:
     from motion2robot.validate import CheckOptions, check, verdict_table
 
-    motion, robot = load_for_check(args)
+    motion, robot, human = load_motion_input(args.file, args)
     report = check(motion, robot, CheckOptions(physics=args.physics))
     print(verdict_table(report))
     if args.json:
@@ -80,5 +42,5 @@ def run(args: argparse.Namespace) -> int:
     if args.html:
         from motion2robot.viz.html_report import write_html_report
 
-        print(f"HTML report written to {write_html_report(report, motion, robot, args.html)}")
+        print(f"HTML report written to {write_html_report(report, motion, robot, args.html, human=human)}")
     return 0 if report.feasible else 1

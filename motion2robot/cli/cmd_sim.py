@@ -12,9 +12,9 @@ import sys
 import time
 from pathlib import Path
 
-from motion2robot.cli.cmd_check import is_robot_motion
-from motion2robot.cli.read_options import add_read_options, read_args_kwargs
-from motion2robot.errors import InputFileError, UserError
+from motion2robot.cli.motion_input import load_motion_input
+from motion2robot.cli.read_options import add_read_options
+from motion2robot.errors import UserError
 from motion2robot.viz.camera import MODES
 from motion2robot.viz.gl import prefer_headless
 from motion2robot.viz.scene import PLACEMENTS, SceneOptions
@@ -44,32 +44,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def load_input(args: argparse.Namespace):
-    """(robot motion, robot, human or None): a RobotMotion .npz as is (its human is re-read from
-    its meta's source), or a human motion file retargeted onto --robot (default op3)."""
-    from motion2robot.robot import load_robot
-    from motion2robot.robot_motion import RobotMotion
-
-    path = Path(args.input)
-    if is_robot_motion(path):
-        motion = RobotMotion.load(path)
-        robot = load_robot(args.robot or motion.robot)
-        if tuple(robot.joint_names) != tuple(motion.joint_names):
-            raise UserError(f"{path}: made for robot {motion.robot!r}, whose joints differ from {robot.name!r}'s; "
-                            f"drop --robot or retarget the motion for {robot.name}")
-        return motion, robot, None
-    from motion2robot.motion import read_motion
-    from motion2robot.retarget import retarget
-
-    clips = read_motion(path, clip=args.clip, **read_args_kwargs(args))
-    if not clips:
-        raise InputFileError(f"{path}: no motion clip found; check the file")
-    if len(clips) > 1:
-        raise UserError(f"{path}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1}")
-    robot = load_robot(args.robot or "op3")
-    return retarget(clips[0], robot), robot, clips[0]
-
-
 def run(args: argparse.Namespace) -> int:
     prefer_headless()  # no display and no MUJOCO_GL: EGL
     from motion2robot.robot.world import make_world
@@ -80,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if args.render and Path(args.render).suffix.lower() not in (".mp4", ".gif"):
         raise UserError(f"--render {args.render}: unknown video type; use a name ending in .mp4 or .gif")
-    motion, robot, human = load_input(args)
+    motion, robot, human = load_motion_input(args.input, args)
     report = None
     if not args.no_check:
         from motion2robot.validate import CheckOptions, check
