@@ -203,7 +203,7 @@ def test_walk_clip_floor_and_stance_pinned(op3):
     from motion2robot.motion import read_motion
 
     human = read_motion(MOTIONS / "bvh" / "bandai_walk_normal_001.bvh")[0]
-    out = retarget(human, op3, RetargetOptions(balance=False))
+    out = retarget(human, op3, RetargetOptions(balance=False, hold_stance_yaw=True))
     q = out.qpos
     d = mujoco.MjData(op3.model)
     corners = np.zeros((len(q), 2, 4, 3))

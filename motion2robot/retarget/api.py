@@ -78,8 +78,12 @@ class RetargetOptions:
     hinge trajectories to the speed/acceleration the servos can follow
     (:func:`~motion2robot.retarget.smoothing.servo_targets`) and, with balance on, the root's
     acceleration (off = only the exact velocity clamp; faster motion, may fail the torque checks).
-    root_pass: finish with the exact root pass (a yaw and a translation of the root only: floor,
-    stance sole pinned and not spinning)."""
+    root_pass: finish with the exact root pass (a translation of the root only: floor, stance
+    sole pinned). hold_stance_yaw: the root pass also turns the whole robot about the vertical so a
+    foot alone in contact keeps its yaw (no spinning stance foot). Off by default: it stops the
+    spin, but turns the body off the human's heading (walk: heading error 2 -> 11 deg, path error
+    3 -> 20 cm) and its easing back makes both feet slide a little in some double-support frames
+    of quasi-static clips (bandai byebye, an MDM throw), which then fail the ground check."""
 
     balance: bool = True
     fps: float | None = None
@@ -93,6 +97,7 @@ class RetargetOptions:
     solver: str = "fast"
     smoothing: bool = True
     root_pass: bool = True
+    hold_stance_yaw: bool = False
 
 
 def _points(problem: CompiledProblem, Q: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -197,7 +202,8 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     pts = pts or _points(problem, Q)
     shift = None
     if opt.root_pass:  # joints final: move only the root onto the floor / stance anchors
-        shift = root_shift(pts[1], labels, human.fps, root_target if opt.smoothing else None)
+        shift = root_shift(pts[1], labels, human.fps, root_target if opt.smoothing else None,
+                           hold_yaw=opt.hold_stance_yaw)
         Q = shift.apply(Q)  # a rigid root motion moves every point with it; the capsule gaps stay
         pts = (shift.points(pts[0]), shift.points(pts[1]), shift.points(pts[2][:, None])[:, 0], pts[3])
     solve_s = time.perf_counter() - t_solve

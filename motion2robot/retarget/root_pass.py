@@ -230,12 +230,15 @@ def vertical_shift(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 
 def root_shift(corners: np.ndarray, labels: np.ndarray, fps: float, acceleration: float | None = None,
-               yaw_slide: float = YAW_SLIDE) -> RootShift:
+               yaw_slide: float = YAW_SLIDE, hold_yaw: bool = True) -> RootShift:
     """The root yaw and translation of the pass for sole corners ``corners`` (T, 2, 4, 3) (metres,
     world) of the final joint trajectory and contact labels ``labels`` (T, 2); ``acceleration``
     (m/s^2, None = no smoothing) the target of the optional smoothing of the shift; ``yaw_slide``
-    (m/s, 0 = the held foot's yaw exact) the corner speed the heading's drift correction may cause."""
+    (m/s, 0 = the held foot's yaw exact) the corner speed the heading's drift correction may cause;
+    ``hold_yaw`` False: translation only (no yaw correction)."""
     labels = np.asarray(labels, dtype=bool)
+    if not hold_yaw:
+        return _rigid(corners, labels, fps, acceleration, np.zeros(len(labels)))
     reach = np.linalg.norm(corners[..., :2] - corners[..., :2].mean(axis=2, keepdims=True), axis=-1).max(initial=0.0)
     rate = yaw_slide / reach if reach > 0 else 0.0                     # corner speed = yaw rate * reach
     return _rigid(corners, labels, fps, acceleration, yaw_correction(corners, labels, fps, rate))

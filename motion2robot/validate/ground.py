@@ -91,13 +91,17 @@ def ground(ctx: Context) -> dict:
 
 
 def _contact_speed(corners: np.ndarray, labels: np.ndarray, fps: float) -> np.ndarray:
-    """(T, 2, 4) horizontal corner speed (m/s) from differences between consecutive frames that
-    are both labelled in contact (the larger of the backward and forward step); 0 for a contact
-    phase of one frame."""
-    step = np.linalg.norm(np.diff(corners[..., :2], axis=0), axis=-1) * fps  # (T-1, 2, 4)
-    both = (labels[1:] & labels[:-1])[:, :, None]
-    step = np.where(both, step, 0.0)
-    out = np.zeros(corners.shape[:3])
-    out[1:] = step
-    out[:-1] = np.maximum(out[:-1], step)
-    return out
+    """(T, 2, 4) horizontal corner speed (m/s) while labelled in contact: the central difference
+    over the neighbouring frames that are in contact too (one-sided at a touchdown or lift-off
+    frame, so the swing is not mixed in; 0 for a contact phase of one frame)."""
+    d = np.diff(corners[..., :2], axis=0) * fps                         # (T-1, 2, 4, 2) velocity steps
+    both = (labels[1:] & labels[:-1])[:, :, None, None]
+    d = np.where(both, d, 0.0)
+    n = both[..., 0].astype(float)                                      # (T-1, 2, 1)
+    total = np.zeros(corners.shape[:3] + (2,))
+    count = np.zeros(corners.shape[:3])
+    total[1:] += d
+    total[:-1] += d
+    count[1:] += n
+    count[:-1] += n
+    return np.linalg.norm(total, axis=-1) / np.maximum(count, 1.0)
