@@ -44,14 +44,20 @@ def joint_limits(ctx: Context) -> dict:
 
 def velocity_limits(ctx: Context) -> dict:
     """Joint speed (central differences) against ``velocity_limit * velocity_margin`` (rad/s)."""
-    v = ctx.kin.qvel[:, 6:]
     limit = np.asarray(ctx.robot.velocity_limit) * ctx.options.velocity_margin
-    ratio = np.abs(v) / limit
+    return _against_limit(ctx, ctx.kin.qvel[:, 6:], limit, "rad_s", 3)
+
+
+def _against_limit(ctx: Context, value: np.ndarray, limit: np.ndarray, unit: str, digits: int) -> dict:
+    """The verdict of |value| (T, n) against a per-joint ``limit``: frames over it (runs of at least
+    ``min_run``), per-joint violations with ``peak_<unit>``/``limit_<unit>``, and the maxima."""
+    mag = np.abs(value)
+    ratio = mag / limit
     bad = keep_runs(ratio > 1.0 + RATIO_TOLERANCE, ctx.options.min_run)
-    viol = _per_joint(ctx, bad, ratio, ratio=ratio, peak_rad_s=np.abs(v), limit_rad_s=limit)
+    viol = _per_joint(ctx, bad, ratio, ratio=ratio, **{f"peak_{unit}": mag, f"limit_{unit}": limit})
     return {"ok": not bad.any(), "frames": frame_list(bad),
             "max_ratio": round(float(ratio.max()), 3) if ratio.size else 0.0,
-            "max_rad_s": round(float(np.abs(v).max()), 3) if v.size else 0.0,
+            f"max_{unit}": round(float(mag.max()), digits) if mag.size else 0.0,
             "violations": viol}
 
 
@@ -65,16 +71,9 @@ def acceleration_limits(robot_model, joint_ids, torque_limit, override: float | 
 
 def acceleration(ctx: Context) -> dict:
     """Acceleration spikes: |qacc| above the joint's acceleration limit (see :class:`CheckOptions`)."""
-    a = ctx.kin.qacc[:, 6:]
     limit = acceleration_limits(ctx.robot.model, ctx.robot.joint_ids, ctx.robot.torque_limit,
                                 ctx.options.acceleration_limit)
-    ratio = np.abs(a) / limit
-    bad = keep_runs(ratio > 1.0 + RATIO_TOLERANCE, ctx.options.min_run)
-    viol = _per_joint(ctx, bad, ratio, ratio=ratio, peak_rad_s2=np.abs(a), limit_rad_s2=limit)
-    return {"ok": not bad.any(), "frames": frame_list(bad),
-            "max_ratio": round(float(ratio.max()), 3) if ratio.size else 0.0,
-            "max_rad_s2": round(float(np.abs(a).max()), 2) if a.size else 0.0,
-            "violations": viol}
+    return _against_limit(ctx, ctx.kin.qacc[:, 6:], limit, "rad_s2", 2)
 
 
 def torque_limits(ctx: Context) -> dict:
