@@ -72,7 +72,7 @@ class RetargetOptions:
     iterations: LM iterations of the free-feet and pinned stages; corrections: rounds of (smoothing
     within the servo's speed/acceleration + 2 Newton projections onto the hard constraints + the
     exact velocity clamp). margin: support polygon
-    shrink (m; None = a quarter of the smaller sole half-extent). backend: "auto" | "c" | "vm".
+    shrink (m; None = a quarter of the smaller sole half-extent). backend: "auto" | "lanes" | "c" | "vm" (see :mod:`~motion2robot.retarget.compiled`).
     solver: "fast" (batched LM, :mod:`~motion2robot.retarget.solver`) or "ipopt" (the per-frame
     baseline of :mod:`~motion2robot.retarget.baseline`, same costs). smoothing: round off the
     hinge trajectories to the speed/acceleration the servos can follow
@@ -222,7 +222,7 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
         "contacts": labels.astype(int).tolist(), "contacts_source": label_source,
         "human_root_xy": kp[:, 0, :2].tolist(), "balance": bool(opt.balance), "support_margin": margin,
         "solver": {
-            "method": ("batched Gauss-Newton/LM (casadi " + problem.backend + ")" if opt.solver == "fast"
+            "method": ("batched Gauss-Newton/LM (" + problem.backend + " backend)" if opt.solver == "fast"
                        else "per-frame IPOPT (casadi nlpsol)"),
             "time_s": solve_s, "total_s": total_s, "frames_per_s": T / solve_s if solve_s > 0 else None,
             "compile_s": problem.compile_s, "build_s": problem.build_s, "compiled_from_cache": problem.cached,

@@ -1,13 +1,21 @@
 """Compile the problem's casadi functions to C once per robot and cache the shared library.
 
+Three backends, best first:
+
+- ``"lanes"``: C from :mod:`~motion2robot.retarget.lanes` (several frames per vector operation),
+  one file per function compiled in parallel;
+- ``"c"``: casadi's own code generator (one frame at a time), if lane code cannot be made;
+- ``"vm"``: casadi's virtual machine when there is no C compiler (slower, same numbers).
+
 The generated C source is hashed; the library lives in ``$MOTION2ROBOT_CACHE`` (default
-``~/.cache/motion2robot``) as ``casadi/<hash>.so``, so a second process (or a second run) only
-loads it. When no C compiler is available the casadi virtual machine evaluates the same
-functions (slower, same numbers).
+``~/.cache/motion2robot``) as ``lanes/<hash>.so`` or ``casadi/<hash>.so``, so a second process
+(or a second run) only loads it. The hash covers the compiler flags, which name the vector
+instruction set, so a cache shared by different machines never hands one a library it cannot run.
 """
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import hashlib
 import os
@@ -15,16 +23,23 @@ import shutil
 import subprocess
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from motion2robot.retarget import lanes
 from motion2robot.retarget.problem import ProblemSpec, build_functions, build_spec
 from motion2robot.robot.robot import Robot
 
-CFLAGS = ("-O1", "-fPIC", "-shared")  # -O2 runs ~10 % faster but compiles ~2x longer
+CFLAGS = ("-O1", "-fPIC", "-shared")  # casadi's code: -O2 runs ~10 % faster but compiles ~2x longer
+#: Lane code: -O1; no FMA contraction, so the numbers are casadi's.
+LANE_CFLAGS = ("-O1", "-fPIC", "-ffp-contract=off")
+#: Inputs shared by all frames (the term weights ``w``), per function.
+SHARED_INPUTS = {"step": (2,), "cost": (2,)}
+BACKENDS = ("auto", "lanes", "c", "vm")
 
 
 def cache_dir() -> Path:
@@ -32,32 +47,55 @@ def cache_dir() -> Path:
     return Path(root) if root else Path.home() / ".cache" / "motion2robot"
 
 
+def _compiler() -> str | None:
+    return shutil.which(os.environ.get("CC", "gcc"))
+
+
 @dataclass(frozen=True, eq=False)
 class CompiledProblem:
-    """A robot's problem ready to evaluate: ``step``/``project``/``points`` casadi functions (compiled C when
-    ``backend == "c"``), the spec, and how long building/compiling took (s)."""
+    """A robot's problem ready to evaluate: the ``step``/``cost``/``project``/``violation``/``points``
+    casadi functions of :func:`~motion2robot.retarget.problem.build_functions` (compiled per
+    ``backend``), the spec, and how long building/compiling took (s)."""
 
     spec: ProblemSpec
-    step: ca.Function
-    project: ca.Function
-    points: ca.Function
+    functions: dict[str, ca.Function]
     backend: str
     build_s: float
     compile_s: float
     cached: bool
+    library: ctypes.CDLL | None = None  # the lane code, backend "lanes"
 
-    @functools.lru_cache(maxsize=8)
-    def step_eval(self, frames: int) -> MappedEval:
-        """``step`` over ``frames`` frames in one call (the weights ``w`` shared by all frames)."""
-        return MappedEval(self.step.map("m2r_step_map", "serial", frames, [2], []), frames)
+    @functools.lru_cache(maxsize=16)
+    def _lane(self, name: str) -> lanes.LaneEval:
+        return lanes.LaneEval(self.library, self.functions[name], SHARED_INPUTS.get(name, ()))
 
-    @functools.lru_cache(maxsize=8)
-    def project_eval(self, frames: int) -> MappedEval:
-        return MappedEval(self.project.map(frames, "serial"), frames)
+    @functools.lru_cache(maxsize=40)
+    def _mapped(self, name: str, frames: int) -> MappedEval:
+        f = self.functions[name]
+        shared = SHARED_INPUTS.get(name, ())
+        if shared:
+            return MappedEval(f.map(f"{f.name()}_map", "serial", frames, list(shared), []), frames)
+        return MappedEval(f.map(frames, "serial"), frames)
 
-    @functools.lru_cache(maxsize=8)
-    def points_eval(self, frames: int) -> MappedEval:
-        return MappedEval(self.points.map(frames, "serial"), frames)
+    def evaluator(self, name: str, frames: int):
+        """Callable evaluating function ``name`` on ``frames`` frames: inputs (frames, size) arrays
+        (the weights ``w`` one vector), outputs (frames, size) arrays."""
+        return self._lane(name) if self.library is not None else self._mapped(name, frames)
+
+    def step_eval(self, frames: int):
+        return self.evaluator("step", frames)
+
+    def cost_eval(self, frames: int):
+        return self.evaluator("cost", frames)
+
+    def project_eval(self, frames: int):
+        return self.evaluator("project", frames)
+
+    def violation_eval(self, frames: int):
+        return self.evaluator("violation", frames)
+
+    def points_eval(self, frames: int):
+        return self.evaluator("points", frames)
 
 
 class MappedEval:
@@ -77,33 +115,66 @@ class MappedEval:
         self.frames = frames
 
     def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
-        """Evaluate; each input is copied into its bound array; returns copies of the outputs."""
+        """Evaluate; each input is copied into its bound array; returns copies of the outputs,
+        each reshaped to (frames, size)."""
         for a, x in zip(self.args, inputs):
             a[...] = np.reshape(x, a.shape)
         self._eval()
-        return [r.copy() for r in self.res]
+        return [r.reshape(self.frames, -1).copy() for r in self.res]
+
+
+def _run(cmd: list[str]) -> None:
+    subprocess.run(cmd, check=True, capture_output=True)
 
 
 def _compile(src: Path, out: Path) -> None:
     cc = os.environ.get("CC", "gcc")
     tmp = out.with_name(out.name + f".{os.getpid()}.tmp")
-    subprocess.run([cc, *CFLAGS, str(src), "-o", str(tmp), "-lm"], check=True, capture_output=True)
+    _run([cc, *CFLAGS, str(src), "-o", str(tmp), "-lm"])
     tmp.replace(out)  # atomic: concurrent processes never load a half-written library
 
 
-@functools.lru_cache(maxsize=8)
-def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
-    """The robot's problem, code-generated and compiled (cached on disk) unless ``backend`` is
-    ``"vm"`` or no C compiler is found."""
+def _lane_library(functions: dict[str, ca.Function],
+                  shared: dict[str, tuple[int, ...]] = SHARED_INPUTS) -> tuple[Path, bool, float] | None:
+    """Build (or find in the cache) the lane-code library of ``functions`` (``shared``: their
+    inputs shared by all frames): (path, was cached, compile seconds); None when some function
+    has an operation without lane code."""
+    width, isa_flags = lanes.isa()
+    flags = (*LANE_CFLAGS, *isa_flags)
+    try:
+        sources = {name: lanes.header(width) + lanes.function_source(f, shared.get(name, ()))
+                   for name, f in functions.items()}
+    except NotImplementedError:
+        return None
+    digest = hashlib.sha256("".join(sources.values()).encode() + " ".join(flags).encode()).hexdigest()[:20]
+    lib = cache_dir() / "lanes" / f"{digest}.so"
+    if lib.is_file():
+        return lib, True, 0.0
     t0 = time.perf_counter()
-    spec = build_spec(robot)
-    step, project, points = build_functions(spec)
-    build_s = time.perf_counter() - t0
-    if backend == "vm" or (backend == "auto" and shutil.which(os.environ.get("CC", "gcc")) is None):
-        return CompiledProblem(spec, step, project, points, "vm", build_s, 0.0, False)
+    lib.parent.mkdir(parents=True, exist_ok=True)
+    cc = os.environ.get("CC", "gcc")
+    with tempfile.TemporaryDirectory() as tmp:
+        objs = []
+        jobs = []
+        for name, text in sources.items():
+            src = Path(tmp) / f"{name}.c"
+            src.write_text(text)
+            objs.append(str(src.with_suffix(".o")))
+            jobs.append([cc, *flags, "-c", str(src), "-o", objs[-1]])
+        # the biggest files first, one compiler per core
+        jobs.sort(key=lambda cmd: -Path(cmd[-3]).stat().st_size)
+        with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as pool:
+            list(pool.map(_run, jobs))
+        part = lib.with_name(lib.name + f".{os.getpid()}.tmp")
+        _run([cc, "-shared", *objs, "-o", str(part), "-lm"])
+        part.replace(lib)  # atomic: concurrent processes never load a half-written library
+    return lib, False, time.perf_counter() - t0
+
+
+def _casadi_library(functions: dict[str, ca.Function]) -> tuple[Path, bool, float]:
     with tempfile.TemporaryDirectory() as tmp:
         gen = ca.CodeGenerator("m2r_problem.c", {"with_header": False})
-        for f in (step, project, points):
+        for f in functions.values():
             gen.add(f)
         src = Path(gen.generate(tmp + os.sep))
         digest = hashlib.sha256(src.read_bytes() + " ".join(CFLAGS).encode()).hexdigest()[:20]
@@ -113,6 +184,29 @@ def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
         if not cached:
             lib.parent.mkdir(parents=True, exist_ok=True)
             _compile(src, lib)
-        compile_s = time.perf_counter() - t1
-    ext = [ca.external(f"m2r_{name}", str(lib)) for name in ("step", "project", "points")]
-    return CompiledProblem(spec, *ext, "c", build_s, compile_s, cached)
+        return lib, cached, time.perf_counter() - t1
+
+
+@functools.lru_cache(maxsize=8)
+def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
+    """The robot's problem, code-generated and compiled (cached on disk): ``backend`` "auto"
+    (lane code, else casadi's C, else the virtual machine without a C compiler), or one of
+    "lanes" / "c" / "vm"."""
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(BACKENDS)}")
+    t0 = time.perf_counter()
+    spec = build_spec(robot)
+    functions = build_functions(spec)
+    build_s = time.perf_counter() - t0
+    if backend == "vm" or (backend == "auto" and _compiler() is None):
+        return CompiledProblem(spec, functions, "vm", build_s, 0.0, False)
+    if backend in ("auto", "lanes"):
+        built = _lane_library(functions)
+        if built is not None:
+            lib, cached, compile_s = built
+            return CompiledProblem(spec, functions, "lanes", build_s, compile_s, cached, ctypes.CDLL(str(lib)))
+        if backend == "lanes":
+            raise ValueError("lane code cannot be generated for this robot's functions; use backend 'c'")
+    lib, cached, compile_s = _casadi_library(functions)
+    ext = {name: ca.external(f.name(), str(lib)) for name, f in functions.items()}
+    return CompiledProblem(spec, ext, "c", build_s, compile_s, cached)

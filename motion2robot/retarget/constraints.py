@@ -39,10 +39,11 @@ def clamp_velocity(hinges: np.ndarray, vmax: np.ndarray, fps: float) -> np.ndarr
 
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
-    """Counter-clockwise hull vertices of (k, 2) points (Andrew's monotone chain)."""
-    pts = np.unique(np.round(points, 12), axis=0)
+    """Counter-clockwise hull vertices of (k, 2) points (Andrew's monotone chain; a handful of
+    sole corners, so plain Python)."""
+    pts = sorted(set(map(tuple, np.round(np.asarray(points, dtype=float), 12).tolist())))
     if len(pts) <= 2:
-        return pts
+        return np.array(pts, dtype=float).reshape(-1, 2)
 
     def cross(o, a, b):
         return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
@@ -53,7 +54,7 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
             lower.pop()
         lower.append(p)
     upper: list = []
-    for p in pts[::-1]:
+    for p in reversed(pts):
         while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
             upper.pop()
         upper.append(p)
@@ -64,12 +65,12 @@ def halfplanes(hull: np.ndarray, margin: float) -> np.ndarray:
     """(HMAX, 3) rows (nx, ny, d): the hull shrunk by ``margin`` is {c : n . c <= d}; unused
     rows are (0, 0, 1) (never violated)."""
     out = np.tile([0.0, 0.0, 1.0], (HMAX, 1))
-    k = len(hull)
-    for i in range(min(k, HMAX)):
-        a, b = hull[i], hull[(i + 1) % k]
-        e = b - a
-        n = np.array([e[1], -e[0]]) / max(np.linalg.norm(e), 1e-12)  # outward for a ccw hull
-        out[i] = (n[0], n[1], float(n @ a) - margin)
+    k = min(len(hull), HMAX)
+    if k:
+        a = hull[:k]
+        e = np.roll(hull, -1, axis=0)[:k] - a
+        n = np.column_stack([e[:, 1], -e[:, 0]]) / np.maximum(np.linalg.norm(e, axis=1), 1e-12)[:, None]  # outward (ccw)
+        out[:k] = np.column_stack([n, (n * a).sum(axis=1) - margin])
     return out
 
 
@@ -78,17 +79,19 @@ def support_planes(anchors: np.ndarray, labels: np.ndarray, margin: float) -> tu
     ``anchors`` (T, 2, 4, 3) in contact, and (T,) whether the frame has support."""
     T = labels.shape[0]
     planes = np.tile([0.0, 0.0, 1.0], (T, HMAX, 1))
-    cache: dict[bytes, np.ndarray] = {}
-    for t in range(T):
-        feet = np.where(labels[t])[0]
-        if len(feet) == 0:
-            continue
-        pts = anchors[t, feet, :, :2].reshape(-1, 2)
-        key = pts.tobytes()
-        if key not in cache:
-            cache[key] = halfplanes(convex_hull(pts), margin)
-        planes[t] = cache[key]
-    return planes, labels.any(axis=1)
+    support = labels.any(axis=1)
+    if not support.any():
+        return planes, support
+    # frames of one contact phase (or pair of phases) share their polygon: one hull per distinct
+    # set of pinned corners (feet not in contact marked with a value no corner has)
+    keys = np.where(labels[:, :, None, None], anchors[..., :2], np.inf).reshape(T, -1)[support]
+    unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+    rows = np.empty((len(unique), HMAX, 3))
+    for i, key in enumerate(unique):
+        pts = key.reshape(-1, 2)
+        rows[i] = halfplanes(convex_hull(pts[np.isfinite(pts[:, 0])]), margin)
+    planes[support] = rows[inverse.reshape(-1)]
+    return planes, support
 
 
 def support_margin(com_xy: np.ndarray, planes: np.ndarray) -> np.ndarray:

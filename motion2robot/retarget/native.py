@@ -1,5 +1,5 @@
-"""Two sequential loops over the frames, in C: the pentadiagonal solve of the smoothing
-(:mod:`~motion2robot.retarget.smoothing`) and the forward-backward velocity clamp
+"""Sequential loops over the frames, in C: the pentadiagonal solve of the smoothing and its
+reweighting loop (:mod:`~motion2robot.retarget.smoothing`) and the forward-backward velocity clamp
 (:mod:`~motion2robot.retarget.constraints`). Python loops over the frames cost more than the rest
 of the retargeting; these kernels are compiled once (cached beside the casadi library, see
 :mod:`~motion2robot.retarget.compiled`) and loaded with ctypes. Without a C compiler the callers
@@ -23,32 +23,77 @@ SOURCE = r"""
 /* A x = b, A symmetric positive definite pentadiagonal per column j of k columns; arrays are
    row-major (T, k): d0 diagonal, d1 first (T-1 rows), d2 second (T-2 rows) super-diagonal.
    b is overwritten with x; l0, l1, l2, work (T, k) scratch. */
+static void penta_column(int T, int k, int j, const double *d0, const double *d1, const double *d2, double *b,
+                         double *l0, double *l1, double *l2) {
+    for (int t = 0; t < T; ++t) {
+        double s = d0[t * k + j], r = b[t * k + j], a2 = 0.0, a1 = 0.0;
+        if (t >= 2) {
+            a2 = d2[(t - 2) * k + j] / l0[(t - 2) * k + j];
+            s -= a2 * a2;
+            r -= a2 * b[(t - 2) * k + j];
+        }
+        if (t >= 1) {
+            a1 = (d1[(t - 1) * k + j] - (t >= 2 ? a2 * l1[(t - 1) * k + j] : 0.0)) / l0[(t - 1) * k + j];
+            s -= a1 * a1;
+            r -= a1 * b[(t - 1) * k + j];
+        }
+        l2[t * k + j] = a2;
+        l1[t * k + j] = a1;
+        l0[t * k + j] = sqrt(s);
+        b[t * k + j] = r / l0[t * k + j];
+    }
+    for (int t = T - 1; t >= 0; --t) {
+        double r = b[t * k + j];
+        if (t + 1 < T) r -= l1[(t + 1) * k + j] * b[(t + 1) * k + j];
+        if (t + 2 < T) r -= l2[(t + 2) * k + j] * b[(t + 2) * k + j];
+        b[t * k + j] = r / l0[t * k + j];
+    }
+}
+
 void m2r_penta_solve(int T, int k, const double *d0, const double *d1, const double *d2, double *b,
                      double *l0, double *l1, double *l2) {
-    for (int j = 0; j < k; ++j) {
-        for (int t = 0; t < T; ++t) {
-            double s = d0[t * k + j], r = b[t * k + j], a2 = 0.0, a1 = 0.0;
-            if (t >= 2) {
-                a2 = d2[(t - 2) * k + j] / l0[(t - 2) * k + j];
-                s -= a2 * a2;
-                r -= a2 * b[(t - 2) * k + j];
+    for (int j = 0; j < k; ++j) penta_column(T, k, j, d0, d1, d2, b, l0, l1, l2);
+}
+
+/* The reweighting loop of smoothing.smooth_to_targets, same steps: y (T, k) starts as r; while
+   some |diff y| / vstep or |diff2 y| / astep exceeds 1 (over all columns), raise the weights u
+   (T-1, k) and m (T-2, k) of those rows and solve the pentadiagonal system again. A column whose
+   weights did not change keeps its solution (the same system), so only the others are solved.
+   scratch: 8 T k doubles. */
+void m2r_smooth_irls(int T, int k, const double *r, const double *vstep, const double *astep,
+                     int iterations, double *y, double *scratch) {
+    double *u = scratch, *m = u + T * k, *d0 = m + T * k, *d1 = d0 + T * k, *d2 = d1 + T * k;
+    double *l0 = d2 + T * k, *l1 = l0 + T * k, *l2 = l1 + T * k;
+    for (int i = 0; i < T * k; ++i) { y[i] = r[i]; u[i] = 0.0; m[i] = 0.0; }
+    for (int it = 0; it < iterations; ++it) {
+        int any = 0;
+        for (int j = 0; j < k; ++j) {
+            int changed = 0;
+            for (int t = 0; t + 1 < T; ++t) {
+                double rv = fabs(y[(t + 1) * k + j] - y[t * k + j]) / vstep[j];
+                if (rv > 1.0) { u[t * k + j] = (u[t * k + j] + 1.0) * rv * rv; changed = 1; }
+                if (t + 2 < T) {
+                    double ra = fabs(y[(t + 2) * k + j] - 2.0 * y[(t + 1) * k + j] + y[t * k + j]) / astep[j];
+                    if (ra > 1.0) { m[t * k + j] = (m[t * k + j] + 1.0) * ra * ra; changed = 1; }
+                }
             }
-            if (t >= 1) {
-                a1 = (d1[(t - 1) * k + j] - (t >= 2 ? a2 * l1[(t - 1) * k + j] : 0.0)) / l0[(t - 1) * k + j];
-                s -= a1 * a1;
-                r -= a1 * b[(t - 1) * k + j];
+            if (!changed) continue;
+            any = 1;
+            for (int t = 0; t < T; ++t) {
+                d0[t * k + j] = 1.0; d1[t * k + j] = 0.0; d2[t * k + j] = 0.0; y[t * k + j] = r[t * k + j];
             }
-            l2[t * k + j] = a2;
-            l1[t * k + j] = a1;
-            l0[t * k + j] = sqrt(s);
-            b[t * k + j] = r / l0[t * k + j];
+            for (int t = 0; t + 1 < T; ++t) {
+                double a = u[t * k + j];
+                d0[t * k + j] += a; d0[(t + 1) * k + j] += a; d1[t * k + j] -= a;
+                if (t + 2 < T) {
+                    double b = m[t * k + j];
+                    d0[t * k + j] += b; d0[(t + 1) * k + j] += 4.0 * b; d0[(t + 2) * k + j] += b;
+                    d1[t * k + j] -= 2.0 * b; d1[(t + 1) * k + j] -= 2.0 * b; d2[t * k + j] += b;
+                }
+            }
+            penta_column(T, k, j, d0, d1, d2, y, l0, l1, l2);
         }
-        for (int t = T - 1; t >= 0; --t) {
-            double r = b[t * k + j];
-            if (t + 1 < T) r -= l1[(t + 1) * k + j] * b[(t + 1) * k + j];
-            if (t + 2 < T) r -= l2[(t + 2) * k + j] * b[(t + 2) * k + j];
-            b[t * k + j] = r / l0[t * k + j];
-        }
+        if (!any) break;
     }
 }
 
@@ -94,6 +139,8 @@ def library() -> ctypes.CDLL | None:
         return None
     dll.m2r_penta_solve.argtypes = [ctypes.c_int, ctypes.c_int] + [_DP] * 7
     dll.m2r_penta_solve.restype = None
+    dll.m2r_smooth_irls.argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP, _DP, ctypes.c_int, _DP, _DP]
+    dll.m2r_smooth_irls.restype = None
     dll.m2r_clamp_velocity.argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP]
     dll.m2r_clamp_velocity.restype = None
     return dll
@@ -115,6 +162,22 @@ def penta_solve(d0: np.ndarray, d1: np.ndarray, d2: np.ndarray, b: np.ndarray) -
     scratch = [np.empty((T, k)) for _ in range(3)]
     dll.m2r_penta_solve(T, k, *(_ptr(a) for a in args), _ptr(x), *(_ptr(s) for s in scratch))
     return x
+
+
+def smooth_irls(r: np.ndarray, vstep: np.ndarray, astep: np.ndarray, iterations: int) -> np.ndarray | None:
+    """C version of the reweighting loop of
+    :func:`~motion2robot.retarget.smoothing.smooth_to_targets` on (T, k) ``r`` with (k,) step
+    targets; returns the smoothed (T, k) array, or None when the kernels are not available."""
+    dll = library()
+    if dll is None:
+        return None
+    T, k = r.shape
+    src = np.ascontiguousarray(r, dtype=np.float64)
+    vs, as_ = (np.ascontiguousarray(np.broadcast_to(a, (k,)), dtype=np.float64) for a in (vstep, astep))
+    y = np.empty((T, k))
+    scratch = np.empty(8 * T * k)
+    dll.m2r_smooth_irls(T, k, _ptr(src), _ptr(vs), _ptr(as_), iterations, _ptr(y), _ptr(scratch))
+    return y
 
 
 def clamp_velocity(q: np.ndarray, step: np.ndarray) -> np.ndarray | None:

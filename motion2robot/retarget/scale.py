@@ -57,8 +57,8 @@ def human_length(human: HumanMotion, group: str) -> float:
 
 def robot_length(robot: Robot, group: str) -> float | None:
     """The group's chain length at the robot's nominal posture (m), or None when not mapped."""
-    d = robot.new_data()
-    pts = {k: d.site_xpos[s] for k, s in zip(robot.keypoints, robot.keypoint_sites)}
+    xpos = robot.nominal_site_xpos
+    pts = {k: xpos[s] for k, s in zip(robot.keypoints, robot.keypoint_sites)}
     chains = [c for c in _CHAINS[group] if all(k in pts for k in c)]
     if not chains:
         return None

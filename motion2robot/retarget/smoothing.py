@@ -132,6 +132,10 @@ def smooth_to_targets(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, f
                           | (np.abs(np.diff(out, 2, axis=0)) > astep).any(axis=0))
     if len(cols):
         r = out[:, cols]
+        fast = native.smooth_irls(r, vstep[cols], astep[cols], iterations)
+        if fast is not None:
+            out[:, cols] = fast
+            return out
         u = np.zeros((T - 1, len(cols)))
         m = np.zeros((T - 2, len(cols)))
         y = r

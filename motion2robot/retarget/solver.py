@@ -122,13 +122,12 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
         f_prev, Q_prev = f, Q.copy()
         Q = apply_step(Q, dx)
         Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
-    lm[:, :1 + 2 * nv] = 0.0
-    lm[:, 1:1 + nv] = 1.0
-    _, cost, terms = step(Q, params, wvec, lm)
+    cost_of = problem.cost_eval(T)
+    cost, terms = cost_of(Q, params, wvec)
     bad = cost[:, 0] + _temporal(Q, sv, weights)[2] > f_prev * (1 + 1e-12)
     if bad.any():  # the last step made these frames worse: keep their previous iterate
         Q[bad] = Q_prev[bad]
-        _, cost, terms = step(Q, params, wvec, lm)
+        cost, terms = cost_of(Q, params, wvec)
     return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
 
 
@@ -162,7 +161,12 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
     dx_prev = np.zeros((T, nv))
-    for _ in range(iterations + 1):
+    for k in range(iterations + 1):
+        if k == iterations:  # only the last step's outcome is needed: no new step
+            v = problem.violation_eval(T)(Q, params)[0][:, 0]
+            worse = v > v_prev
+            Q[worse], v[worse] = Q_prev[worse], v_prev[worse]
+            break
         lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
         slack = FREE_SLACK if free_at_bounds else 0.0
         lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo - slack
@@ -173,13 +177,11 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
         # back and retry a shorter step in the same direction
         worse = v > v_prev
         Q[worse], v[worse], dx[worse] = Q_prev[worse], v_prev[worse], BACKTRACK * dx_prev[worse]
-        if _ == iterations:
-            break
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
         Q_prev, v_prev, dx_prev = Q.copy(), v, dx.copy()
         Q = apply_step(Q, dx)
         Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
-    return Q, v_prev
+    return Q, v
 
 
 def objective(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, weights: Weights) -> tuple[np.ndarray, np.ndarray]:
@@ -188,10 +190,6 @@ def objective(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, weigh
     T, nv = Q.shape[0], problem.spec.nv
     sv = np.ones(nv)
     sv[:3] = 1.0 / problem.spec.length
-    lm = np.zeros((T, 1 + 2 * nv + 2 * (nv - 6)))
-    lm[:, 1:1 + nv] = 1.0
-    lm[:, 1 + 2 * nv:1 + 2 * nv + nv - 6] = Q[:, 7:]
-    lm[:, 1 + 2 * nv + nv - 6:] = Q[:, 7:]
-    _, _, terms = problem.step_eval(T)(Q, params, np.array(weights.frame_vector()), lm)
+    _, terms = problem.cost_eval(T)(Q, params, np.array(weights.frame_vector()))
     return terms, _temporal(Q, sv, weights)[2]
 

@@ -70,9 +70,8 @@ def initial_qpos(spec: ProblemSpec, kp: np.ndarray) -> np.ndarray:
     half = 0.5 * yaw
     qz = np.stack([np.cos(half), np.zeros(T), np.zeros(T), np.sin(half)], -1)
     q[:, 3:7] = quat_mul(qz, q[:, 3:7])
-    d = rb.new_data()
     if "pelvis" in spec.kp_names:
-        off = d.site_xpos[rb.keypoint_sites[spec.kp_names.index("pelvis")], :2] - rb.nominal_qpos[:2]
+        off = rb.nominal_site_xpos[rb.keypoint_sites[spec.kp_names.index("pelvis")], :2] - rb.nominal_qpos[:2]
     else:
         off = np.zeros(2)
     c, s = np.cos(yaw), np.sin(yaw)

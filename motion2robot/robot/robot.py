@@ -7,6 +7,7 @@ sites ``kp_<keypoint>`` for body-based keypoints and ``sole_<side>_<0..3>`` (cor
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import mujoco
@@ -71,6 +72,13 @@ class Robot:
         data.qpos[:] = self.nominal_qpos
         mujoco.mj_kinematics(self.model, data)
         return data
+
+    @functools.cached_property
+    def nominal_site_xpos(self) -> np.ndarray:
+        """(nsite, 3) world positions (m) of every site at the nominal pose (read-only)."""
+        out = self.new_data().site_xpos.copy()
+        out.flags.writeable = False
+        return out
 
     def joint_index(self, name: str) -> int:
         """Index of hinge ``name`` in ``joint_names``."""
