@@ -41,6 +41,7 @@ from motion2robot.motion.human import KP, SMPL22
 from motion2robot.motion.ops import trim
 from motion2robot.retarget import RetargetOptions, Weights, retarget
 from motion2robot.retarget import compiled as compiled_mod
+from motion2robot.retarget import lanes
 from motion2robot.retarget.metrics import acceptance
 from motion2robot.retarget.scale import Scale
 from motion2robot.robot import load_robot
@@ -85,7 +86,10 @@ def compile_time() -> None:
                 os.environ.pop("MOTION2ROBOT_CACHE")
             else:
                 os.environ["MOTION2ROBOT_CACHE"] = old
-    print(f"compile (op3, fresh cache): build casadi graph {cp.build_s:.2f} s, gcc {' '.join(compiled_mod.CFLAGS)} {cp.compile_s:.1f} s")
+    flags = (*compiled_mod.LANE_CFLAGS, *lanes.isa()[1]) if cp.backend == "lanes" else compiled_mod.CFLAGS
+    print(f"compile (op3, fresh cache): build casadi graph {cp.build_s:.2f} s, {cp.backend} backend "
+          f"({lanes.isa()[0] if cp.backend == 'lanes' else 1} frames per operation), "
+          f"gcc {' '.join(flags)} on {os.cpu_count()} cores {cp.compile_s:.1f} s")
 
 
 def speed(robot, humans: list[HumanMotion]) -> float:

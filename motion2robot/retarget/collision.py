@@ -2,8 +2,8 @@
 bounding box (body frame) of the body's collision geoms, radius the larger cross half-extent
 (for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
 for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
-right leg, the two arms, each arm vs the torso, each hand (the wrist keypoint's body and below) vs every body
-of its own leg.
+right leg, the two arms, each arm and each hand vs the torso, each hand (the wrist keypoint's body and below) vs every body
+of its own leg. Mesh bodies get capsules fitted to their vertices (:mod:`~motion2robot.retarget.capsule_fit`).
 
 Boxes get a capsule containing them (over the whole length, radius the cross
 half-diagonal) unless that capsule already touches the other one at the nominal posture, when the
@@ -22,12 +22,14 @@ import casadi as ca
 import mujoco
 import numpy as np
 
+from motion2robot.retarget.capsule_fit import fit_capsule
 from motion2robot.robot.kinematics import quat_to_mat_np
 from motion2robot.robot.robot import Robot
 
 #: Capsules kept per limb: the largest bodies (legs: thigh, shin, foot, ankle and hip-roll links;
-#: arms: upper arm, forearm; hand: the wrist keypoint's body and below).
-LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 1, "hand": 2}
+#: arms: upper arm, forearm; torso: chest and pelvis when they are separate bodies; hand: the
+#: wrist keypoint's body and below).
+LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 2, "hand": 2}
 #: Pairs closer than this (m) at the nominal posture get this much clearance there (see CapsulePair).
 NOMINAL_CLEARANCE = 0.02
 #: A box whose long half-extent is this many times its cross half-extent is "elongated".
@@ -67,20 +69,37 @@ def _geom_box(m: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
     return pts.min(axis=0), pts.max(axis=0)
 
 
+def _mesh_vertices(m: mujoco.MjModel, g: int) -> np.ndarray | None:
+    """A mesh geom's vertices in its body's frame (m), or None for other geom types."""
+    if int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_MESH) or m.geom_dataid[g] < 0:
+        return None
+    mesh = int(m.geom_dataid[g])
+    start, count = int(m.mesh_vertadr[mesh]), int(m.mesh_vertnum[mesh])
+    return m.geom_pos[g] + m.mesh_vert[start:start + count] @ quat_to_mat_np(m.geom_quat[g]).T
+
+
 def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCapsule]:
     """Each body's capsule: along the longest axis of the union of its collision geoms' bounding
     boxes (body frame), radius the larger cross half-extent; with ``contain``, boxes and meshes get the
-    capsule over their whole length with the cross half-diagonal as radius (it holds the corners)."""
+    capsule over their whole length with the cross half-diagonal as radius (it holds the corners),
+    and bodies whose collision geoms are all meshes the capsule fitted to their vertices
+    (:func:`~motion2robot.retarget.capsule_fit.fit_capsule`)."""
     boxes: dict[int, list] = {}
     rounded: dict[int, bool] = {}
+    verts: dict[int, list] = {}
     for g in range(m.ngeom):
         if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
             continue
         b = int(m.geom_bodyid[g])
         boxes.setdefault(b, []).append(_geom_box(m, g))
         rounded[b] = rounded.get(b, True) and int(m.geom_type[g]) in _ROUND
+        verts.setdefault(b, []).append(_mesh_vertices(m, g))
     out = {}
     for b, bs in boxes.items():
+        if contain and all(v is not None for v in verts[b]):  # meshes only: fitted to their vertices
+            p0, p1, r = fit_capsule(np.concatenate(verts[b]))
+            out[b] = BodyCapsule(b, p0, p1, r)
+            continue
         lo = np.min([x[0] for x in bs], axis=0)
         hi = np.max([x[1] for x in bs], axis=0)
         centre, half = (lo + hi) / 2, (hi - lo) / 2
@@ -159,7 +178,7 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
     for side in ("left", "right"):
         if f"{side}_arm" in limbs:
             limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
-            groups += [(f"{side}_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
+            groups += [(f"{side}_arm", "torso"), (f"{side}_hand", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
     if "left_arm" in limbs and "right_arm" in limbs:
         groups.append(("left_arm", "right_arm"))
     d = robot.new_data()
@@ -169,11 +188,14 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
         return p + r @ c.p0, p + r @ c.p1
 
     out = []
+    seen: set[tuple[int, int]] = set()
     for ga, gb in groups:
         for a in limbs.get(ga, []):
             for b in limbs.get(gb, []):
-                if a not in caps or b not in caps or m.body_parentid[a] == b or m.body_parentid[b] == a:
+                if a not in caps or b not in caps or m.body_parentid[a] == b or m.body_parentid[b] == a \
+                        or (min(a, b), max(a, b)) in seen:
                     continue
+                seen.add((min(a, b), max(a, b)))
                 # the containing capsules, unless they touch at the nominal posture (then the inscribed ones)
                 for ca_, cb in ((outer[a], outer[b]), (caps[a], caps[b])):
                     clearance = _gap_np(world(ca_), world(cb)) - ca_.radius - cb.radius - MARGIN
