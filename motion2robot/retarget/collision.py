@@ -2,7 +2,7 @@
 bounding box (body frame) of the body's collision geoms, radius the larger cross half-extent
 (for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
 for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
-right leg, the two arms, each arm and each hand vs the torso, each hand (the wrist keypoint's body and below) vs every body
+right leg, the two arms and hands, each arm and each hand vs the torso, each hand (the wrist keypoint's body and below) vs every body
 of its own leg. Mesh bodies get capsules fitted to their vertices (:mod:`~motion2robot.retarget.capsule_fit`).
 
 Boxes get a capsule containing them (over the whole length, radius the cross
@@ -180,7 +180,8 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
             limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
             groups += [(f"{side}_arm", "torso"), (f"{side}_hand", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
     if "left_arm" in limbs and "right_arm" in limbs:
-        groups.append(("left_arm", "right_arm"))
+        groups += [("left_arm", "right_arm"), ("left_hand", "right_hand"), ("left_hand", "right_arm"),
+                   ("left_arm", "right_hand")]
     d = robot.new_data()
 
     def world(c: BodyCapsule):
