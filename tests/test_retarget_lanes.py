@@ -98,3 +98,12 @@ def test_op3_problem_same_as_casadi_virtual_machine():
         for g, v in zip(got, want):
             assert g.shape == v.shape and np.all(np.isfinite(g))
             np.testing.assert_allclose(g, v, rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def test_a_failing_compiler_falls_back_to_the_virtual_machine(cache, monkeypatch):
+    monkeypatch.setenv("CC", "false")                                       # found on PATH, fails every compile
+    problem = compiled_problem.__wrapped__(load_robot("op3"))
+    assert problem.backend == "vm"
+    T = 3
+    kp = problem.points_eval(T)(np.tile(load_robot("op3").nominal_qpos, (T, 1)))[0]
+    assert kp.shape[0] == T and np.all(np.isfinite(kp))

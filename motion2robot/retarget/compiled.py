@@ -151,6 +151,15 @@ def _lane_library(functions: dict[str, ca.Function],
     if lib.is_file():
         return lib, True, 0.0
     t0 = time.perf_counter()
+    try:
+        _build_lanes(sources, flags, lib)
+    except (OSError, subprocess.CalledProcessError):  # a compiler without vector extensions: casadi's C
+        return None
+    return lib, False, time.perf_counter() - t0
+
+
+def _build_lanes(sources: dict[str, str], flags: tuple[str, ...], lib: Path) -> None:
+    """Compile one object per function (in parallel) and link them into ``lib`` (atomically)."""
     lib.parent.mkdir(parents=True, exist_ok=True)
     cc = os.environ.get("CC", "gcc")
     with tempfile.TemporaryDirectory() as tmp:
@@ -168,7 +177,6 @@ def _lane_library(functions: dict[str, ca.Function],
         part = lib.with_name(lib.name + f".{os.getpid()}.tmp")
         _run([cc, "-shared", *objs, "-o", str(part), "-lm"])
         part.replace(lib)  # atomic: concurrent processes never load a half-written library
-    return lib, False, time.perf_counter() - t0
 
 
 def _casadi_library(functions: dict[str, ca.Function]) -> tuple[Path, bool, float]:
@@ -207,6 +215,11 @@ def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
             return CompiledProblem(spec, functions, "lanes", build_s, compile_s, cached, ctypes.CDLL(str(lib)))
         if backend == "lanes":
             raise ValueError("lane code cannot be generated for this robot's functions; use backend 'c'")
-    lib, cached, compile_s = _casadi_library(functions)
+    try:
+        lib, cached, compile_s = _casadi_library(functions)
+    except (OSError, subprocess.CalledProcessError):
+        if backend == "c":
+            raise
+        return CompiledProblem(spec, functions, "vm", build_s, 0.0, False)  # the compiler failed: same numbers, slower
     ext = {name: ca.external(f.name(), str(lib)) for name, f in functions.items()}
     return CompiledProblem(spec, ext, "c", build_s, compile_s, cached)
