@@ -17,6 +17,10 @@ from motion2robot.retarget.contacts import phases
 #: Directions (evenly spread) and lengths (m) tried for the push of an anchor.
 DIRECTIONS = 32
 STEPS = np.linspace(0.0, 0.15, 301)
+#: Lengths tried per vectorised batch (the search stops at the first batch with a clear move).
+CHUNK = 25
+_ANGLES = np.linspace(0.0, 2 * np.pi, DIRECTIONS, endpoint=False)
+_MOVES = STEPS[:, None, None] * np.stack([np.cos(_ANGLES), np.sin(_ANGLES)], -1)[None]   # (S, D, 2)
 
 
 def segment_distance(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -37,14 +41,14 @@ def _push(seg: np.ndarray, other: np.ndarray, need: float) -> np.ndarray:
     which it is at least ``need`` from ``other`` (2, 2); the zero move when it already is."""
     if segment_distance(seg[0], seg[1], other[0], other[1]) >= need:
         return np.zeros(2)
-    ang = np.linspace(0.0, 2 * np.pi, DIRECTIONS, endpoint=False)
-    moves = STEPS[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)[None]   # (S, D, 2)
-    gap = segment_distance(seg[0] + moves, seg[1] + moves, other[0], other[1])        # (S, D)
-    ok = gap >= need
-    if not ok.any():
-        return moves[-1, int(np.argmax(gap[-1]))]
-    first = np.where(ok.any(axis=1))[0][0]
-    return moves[first, int(np.argmax(gap[first]))]
+    for lo in range(0, len(STEPS), CHUNK):  # lengths in increasing chunks: pushes are mostly short
+        moves = _MOVES[lo:lo + CHUNK]                                                 # (S, D, 2)
+        gap = segment_distance(seg[0] + moves, seg[1] + moves, other[0], other[1])    # (S, D)
+        ok = (gap >= need).any(axis=1)
+        if ok.any():
+            first = int(np.argmax(ok))
+            return moves[first, int(np.argmax(gap[first]))]
+    return moves[-1, int(np.argmax(gap[-1]))]
 
 
 def _foot_segment(anchor: np.ndarray, local: np.ndarray) -> np.ndarray:

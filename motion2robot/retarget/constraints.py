@@ -10,6 +10,8 @@ passes that make joint and velocity limits hold whatever the optimiser did.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from motion2robot.retarget import native
@@ -64,14 +66,16 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
 def halfplanes(hull: np.ndarray, margin: float) -> np.ndarray:
     """(HMAX, 3) rows (nx, ny, d): the hull shrunk by ``margin`` is {c : n . c <= d}; unused
     rows are (0, 0, 1) (never violated)."""
-    out = np.tile([0.0, 0.0, 1.0], (HMAX, 1))
-    k = min(len(hull), HMAX)
-    if k:
-        a = hull[:k]
-        e = np.roll(hull, -1, axis=0)[:k] - a
-        n = np.column_stack([e[:, 1], -e[:, 0]]) / np.maximum(np.linalg.norm(e, axis=1), 1e-12)[:, None]  # outward (ccw)
-        out[:k] = np.column_stack([n, (n * a).sum(axis=1) - margin])
-    return out
+    out = [(0.0, 0.0, 1.0)] * HMAX
+    pts = np.asarray(hull, dtype=float).tolist()
+    k = len(pts)
+    for i in range(min(k, HMAX)):
+        (ax, ay), (bx, by) = pts[i], pts[(i + 1) % k]
+        ex, ey = bx - ax, by - ay
+        norm = max(math.hypot(ex, ey), 1e-12)
+        nx, ny = ey / norm, -ex / norm  # outward for a ccw hull
+        out[i] = (nx, ny, nx * ax + ny * ay - margin)
+    return np.array(out)
 
 
 def support_planes(anchors: np.ndarray, labels: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
@@ -82,15 +86,19 @@ def support_planes(anchors: np.ndarray, labels: np.ndarray, margin: float) -> tu
     support = labels.any(axis=1)
     if not support.any():
         return planes, support
-    # frames of one contact phase (or pair of phases) share their polygon: one hull per distinct
-    # set of pinned corners (feet not in contact marked with a value no corner has)
-    keys = np.where(labels[:, :, None, None], anchors[..., :2], np.inf).reshape(T, -1)[support]
-    unique, inverse = np.unique(keys, axis=0, return_inverse=True)
-    rows = np.empty((len(unique), HMAX, 3))
-    for i, key in enumerate(unique):
-        pts = key.reshape(-1, 2)
-        rows[i] = halfplanes(convex_hull(pts[np.isfinite(pts[:, 0])]), margin)
-    planes[support] = rows[inverse.reshape(-1)]
+    # frames of one contact phase (or pair of phases) share their polygon: one hull per run of
+    # frames with the same pinned corners (feet not in contact marked with a value no corner has)
+    keys = np.where(labels[:, :, None, None], anchors[..., :2], np.inf).reshape(T, -1)
+    cuts = np.flatnonzero((keys[1:] != keys[:-1]).any(axis=1)) + 1
+    cache: dict[bytes, np.ndarray] = {}
+    for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [T]])):
+        if not support[a]:
+            continue
+        key = keys[a].tobytes()
+        if key not in cache:
+            pts = keys[a].reshape(-1, 2)
+            cache[key] = halfplanes(convex_hull(pts[np.isfinite(pts[:, 0])]), margin)
+        planes[a:b] = cache[key]
     return planes, support
 
 

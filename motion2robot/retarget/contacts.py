@@ -49,13 +49,13 @@ def anchor_soles(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
     corners ``corners`` (T, 2, 4, 3) of an unpinned solve: per phase, the centre and yaw of the
     sole in its first frame, the corners' mean layout about the centre (a rigid rectangle), at z = 0."""
     out = np.full(corners.shape, np.nan)
+    xy = corners[..., :2]                                             # (T, 2, 4, 2)
+    centre = xy.mean(axis=2)                                          # (T, 2, 2)
+    fwd = (xy[:, :, 0] + xy[:, :, 1]) - (xy[:, :, 2] + xy[:, :, 3])   # front minus back
+    yaw = np.arctan2(fwd[..., 1], fwd[..., 0])                        # (T, 2)
+    rel = np.einsum("tfij,tfkj->tfki", _rotz(-yaw), xy - centre[:, :, None])  # sole layouts, (T, 2, 4, 2)
     for f, a, b in phases(labels):
-        c = corners[a:b, f]                                   # (n, 4, 3)
-        centre = c[..., :2].mean(axis=1)                      # (n, 2)
-        fwd = (c[:, 0, :2] + c[:, 1, :2]) - (c[:, 2, :2] + c[:, 3, :2])   # front minus back
-        yaw_t = np.arctan2(fwd[:, 1], fwd[:, 0])
-        rel = np.einsum("nij,nkj->nki", _rotz(-yaw_t), c[..., :2] - centre[:, None])  # sole layout, (n, 4, 2)
-        layout = rel.mean(axis=0)
-        out[a:b, f, :, :2] = centre[0] + layout @ _rotz(np.array(yaw_t[0])).T
+        layout = rel[a:b, f].mean(axis=0)
+        out[a:b, f, :, :2] = centre[a, f] + layout @ _rotz(yaw[a, f]).T
         out[a:b, f, :, 2] = 0.0
     return out

@@ -267,15 +267,17 @@ def _smoothed(exact: np.ndarray, corners: np.ndarray, centres: np.ndarray, label
     low = corners[..., 2].min(axis=(1, 2))
     smooth[:, 2] = np.maximum(smooth[:, 2], -low)                    # floor: exact in every frame
     cont = labels[1:] & labels[:-1]
-    out = smooth
+    # whether the pair of frames (t, t+1) slides, for each choice (exact or smoothed) of the two
+    # frames' shifts: slides[2 * (t exact) + (t+1 exact), t]
+    moved = [centres + x[:, None, :2] for x in (smooth, exact)]         # (T, 2, 2) each
+    slides = np.stack([(cont & (np.linalg.norm(moved[j][1:] - moved[i][:-1], axis=-1) * fps > SLIDE_TOLERANCE)).any(axis=1)
+                       for i in (0, 1) for j in (0, 1)])                # (4, T-1)
+    pairs = np.arange(len(exact) - 1)
     bad = np.zeros(len(exact), dtype=bool)
     for _ in range(len(exact)):  # grow the fallback set until no continuing contact slides
-        moved = centres + out[:, None, :2]                           # (T, 2, 2)
-        slide = np.linalg.norm(np.diff(moved, axis=0), axis=-1) * fps    # (T-1, 2)
-        step = (cont & (slide > SLIDE_TOLERANCE)).any(axis=1)
+        step = slides[2 * bad[:-1] + bad[1:], pairs]
         if not step.any():
             break
         bad[1:] |= step
         bad[:-1] |= step
-        out = np.where(bad[:, None], exact, smooth)
-    return out
+    return np.where(bad[:, None], exact, smooth)

@@ -122,12 +122,11 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
         f_prev, Q_prev = f, Q.copy()
         Q = apply_step(Q, dx)
         Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
-    cost_of = problem.cost_eval(T)
-    cost, terms = cost_of(Q, params, wvec)
+    cost, terms = problem.cost_eval(T)(Q, params, wvec)
     bad = cost[:, 0] + _temporal(Q, sv, weights)[2] > f_prev * (1 + 1e-12)
     if bad.any():  # the last step made these frames worse: keep their previous iterate
         Q[bad] = Q_prev[bad]
-        cost, terms = cost_of(Q, params, wvec)
+        cost[bad], terms[bad] = problem.cost_eval(int(bad.sum()))(Q[bad], params[bad], wvec)
     return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
 
 
