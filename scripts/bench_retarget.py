@@ -125,6 +125,44 @@ def baseline(robot, human: HumanMotion, fast_fps: float) -> None:
           f"mean keypoint error fast {1000 * ef:.1f} mm vs IPOPT {1000 * es:.1f} mm; "
           f"mean |dq| {dq:.3f} rad; worst constraint residual fast {1000 * fast.meta['solver']['max_constraint_residual']:.3f} mm, "
           f"IPOPT {1000 * slow.meta['solver']['max_constraint_residual']:.3f} mm")
+    same_problem(robot, human)
+
+
+def same_problem(robot, human: HumanMotion) -> None:
+    """Both solvers on the identical pinned-stage problem (the fast path's stage-2 inputs): the
+    sum of frame objectives each reaches, and whether IPOPT's answer is a fixed point of the LM."""
+    from motion2robot.retarget import baseline as baseline_mod
+    from motion2robot.retarget import solver as solver_mod
+
+    captured = []
+    original = solver_mod.solve
+
+    def spy(problem, params, q0, weights, iterations, lower, upper, *rest, **kw):
+        captured.append((params.copy(), q0.copy(), weights, lower, upper))
+        return original(problem, params, q0, weights, iterations, lower, upper, *rest, **kw)
+
+    solver_mod.solve = spy
+    try:
+        retarget(human, robot)
+    finally:
+        solver_mod.solve = original
+    params, q0, weights, lower, upper = captured[-1]
+    cp = compiled_mod.compiled_problem(robot)
+    wvec = np.array(weights.frame_vector())
+
+    def per_frame(Q):
+        return cp.cost_eval(len(Q))(Q, params, wvec)[0][:, 0]
+
+    ipopt_q = baseline_mod.solve_ipopt(cp, params, q0, weights, 0, lower, upper)[0]
+    line = []
+    for it in (RetargetOptions().iterations[1], 10, 50, 200):
+        line.append(f"LM {it} iterations {per_frame(original(cp, params, q0, weights, it, lower, upper)[0]).sum():.3f}")
+    stay = original(cp, params, ipopt_q, weights, 50, lower, upper)[0]
+    far = per_frame(original(cp, params, q0, weights, 200, lower, upper)[0]) - per_frame(ipopt_q)
+    print(f"  same problem (pinned stage, {len(q0)} frames; frame objectives summed): start {per_frame(q0).sum():.3f}; "
+          f"{'; '.join(line)}; IPOPT {per_frame(ipopt_q).sum():.3f}")
+    print(f"  LM started at IPOPT's answer: {per_frame(stay).sum():.3f} after 50 iterations (a fixed point of the LM); "
+          f"LM from the start above IPOPT by > 0.1 in {int((far > 0.1).sum())} frames (another local minimum there)")
 
 
 def reachable(robot, seeds: int = 3, T: int = 40, fps: float = 20.0, amplitude: float = 0.15) -> float:
