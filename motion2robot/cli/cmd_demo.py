@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     s = motion.meta["solver"]
     a = acceptance(motion, robot)
     err = 1000 * sum(s["residual_per_frame"]) / len(s["residual_per_frame"])
-    print(f"  solver           {s['time_s'] * 1000:.0f} ms = {s['frames_per_s']:.0f} frames/s "
+    print(f"  solver           {s['time_s'] * 1000:.0f} ms = {s['frames_per_s']:.0f} frames/s, first call in this process "
           f"({s['method']}; compile {s['compile_s']:.1f} s{', cached' if s['compiled_from_cache'] else ''})")
     print(f"  scale            legs {motion.meta['scale']['legs']:.3f}, arms {motion.meta['scale']['arms']:.3f}")
     print(f"  keypoint error   {err:.1f} mm mean (robot-sized targets)")

@@ -31,6 +31,7 @@ import numpy as np
 from motion2robot.errors import SolverError
 from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
+from motion2robot.retarget import native
 from motion2robot.retarget.anchor_gap import foot_capsules, separate_anchors
 from motion2robot.retarget.collision import MARGIN
 from motion2robot.retarget.compiled import CompiledProblem, compiled_problem
@@ -145,6 +146,7 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
         raise SolverError(f"{where}: keypoints contain NaN/inf; fix or trim the clip")
     t_all = time.perf_counter()
     problem = compiled_problem(robot, opt.backend)
+    native.library()  # the smoothing/clamp kernels: built on first use, like the problem's code
     spec, w = problem.spec, opt.weights
     scale = opt.scale or auto_scale(human, robot)
     kp = scaled_keypoints(human.positions, scale)
