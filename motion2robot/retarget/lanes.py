@@ -34,6 +34,8 @@ _BINARY = {
     ca.OP_LT: "TRUTH({a} < {b})", ca.OP_LE: "TRUTH({a} <= {b})", ca.OP_EQ: "TRUTH({a} == {b})",
     ca.OP_NE: "TRUTH({a} != {b})", ca.OP_AND: "TRUTH(({a} != 0) & ({b} != 0))",
     ca.OP_OR: "TRUTH(({a} != 0) | ({b} != 0))", ca.OP_IF_ELSE_ZERO: "KEEP({b}, {a} != 0)",
+    # fmin/fmax as selects (they vectorise); they differ from C's only for NaN operands, which the
+    # retargeter never passes (non-finite motions are refused before solving)
     ca.OP_FMIN: "SELECT({a} < {b}, {a}, {b})", ca.OP_FMAX: "SELECT({a} > {b}, {a}, {b})",
 }
 #: Operations done lane by lane through the C library (few in these functions).
