@@ -4,13 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from motion2robot.retarget.anchor_gap import segment_distance
 from motion2robot.retarget.capsule_fit import fit_capsule
 
-
-def _segment_distance(points, p0, p1):
-    d = p1 - p0
-    s = np.clip((points - p0) @ d / max(d @ d, 1e-18), 0.0, 1.0)
-    return np.linalg.norm(points - (p0 + s[:, None] * d), axis=1)
 
 
 def test_holds_every_point_of_a_rotated_cylinder_and_is_tight():
@@ -21,7 +17,7 @@ def test_holds_every_point_of_a_rotated_cylinder_and_is_tight():
     rot = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     pts = pts @ rot.T + np.array([0.1, -0.2, 0.3])
     p0, p1, r = fit_capsule(pts)
-    assert np.all(_segment_distance(pts, p0, p1) <= r + 1e-12)
+    assert np.all(segment_distance(pts, pts, p0, p1) <= r + 1e-12)
     assert 0.049 < r < 0.052                                                # the shell's radius (+ centroid offset)
     axis = (p1 - p0) / np.linalg.norm(p1 - p0)
     assert abs(abs(axis @ rot[:, 2]) - 1) < 1e-3                           # along the cylinder
@@ -34,7 +30,7 @@ def test_a_ball_of_points_gives_a_sphere_like_capsule():
     v = rng.normal(size=(2000, 3))
     pts = 0.02 * v / np.linalg.norm(v, axis=1, keepdims=True)
     p0, p1, r = fit_capsule(pts)
-    assert np.all(_segment_distance(pts, p0, p1) <= r + 1e-12)
+    assert np.all(segment_distance(pts, pts, p0, p1) <= r + 1e-12)
     assert r <= 0.021 and np.linalg.norm(p1 - p0) < 0.01
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from motion2robot.retarget.anchor_gap import segment_distance
 from motion2robot.retarget.collision import _mesh_vertices, body_capsules, collision_pairs
 from motion2robot.robot import load_robot
 from tests._shared import MENAGERIE, requires_menagerie
@@ -29,11 +30,6 @@ def g1():
             os.environ["MENAGERIE_ROOT"] = old
 
 
-def _segment_distance(points, p0, p1):
-    d = p1 - p0
-    s = np.clip((points - p0) @ d / max(d @ d, 1e-18), 0.0, 1.0)
-    return np.linalg.norm(points - (p0 + s[:, None] * d), axis=1)
-
 
 def test_mesh_capsules_hold_their_vertices_and_are_thinner_than_boxes(g1):
     m = g1.model
@@ -46,7 +42,7 @@ def test_mesh_capsules_hold_their_vertices_and_are_thinner_than_boxes(g1):
         if not verts or any(v is None for v in verts):
             continue
         pts = np.concatenate(verts)
-        assert _segment_distance(pts, cap.p0, cap.p1).max() <= cap.radius + 1e-9
+        assert segment_distance(pts, pts, cap.p0, cap.p1).max() <= cap.radius + 1e-9
         checked += 1
     assert checked >= 15
     hip_yaw = m.body("left_hip_yaw_link").id
