@@ -10,7 +10,7 @@ import pytest
 from motion2robot.retarget.anchor_gap import segment_distance
 from motion2robot.retarget.collision import _mesh_vertices, body_capsules, collision_pairs
 from motion2robot.robot import load_robot
-from tests._shared import MENAGERIE, requires_menagerie
+from tests._shared import MENAGERIE, MOTIONS, requires_menagerie, requires_shared
 
 pytestmark = requires_menagerie
 
@@ -54,3 +54,30 @@ def test_pairs_keep_hands_apart_and_off_the_pelvis(g1):
     assert any("left_wrist" in n and "right_wrist" in n for n in names)
     assert any("pelvis" in n and "wrist" in n for n in names)
     assert len(names) == len(collision_pairs(g1))                          # no pair twice
+
+
+def test_upper_arms_are_kept_off_the_torso_by_its_polytope(g1):
+    """G1's torso is modelled by its polytope against the arms: no capsule fits it without
+    swallowing the upper arm at the nominal posture (the pair was dropped before)."""
+    from motion2robot.retarget.polytope import BodyPolytope
+
+    pairs = {p.name: p for p in collision_pairs(g1)}
+    for side in ("left", "right"):
+        pair = pairs[f"{side}_shoulder_yaw_link-torso_link"]
+        assert isinstance(pair.b, BodyPolytope) and pair.allowance == 0.0
+        assert f"{side}_shoulder_roll_link-torso_link" in pairs
+
+
+@requires_shared
+def test_g1_kick_keeps_the_arms_out_of_the_torso(g1):
+    """A boxer's guard (bandai kick, frames 0-80) put G1's upper arms 20-48 mm into its torso;
+    the polytope pairs and the damped extra projection steps keep them out (MuJoCo's geoms)."""
+    from motion2robot.motion import read_motion
+    from motion2robot.motion.ops import trim
+    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.retarget.metrics import acceptance
+
+    human = trim(read_motion(MOTIONS / "bvh" / "bandai_kick_normal_001.bvh")[0], 0, 80)
+    motion = retarget(human, g1, RetargetOptions(balance=False))
+    assert motion.meta["solver"]["max_constraint_residuals"]["self_collision"] < 0.002
+    assert acceptance(motion, g1)["self_collision_mm"] < 2.0

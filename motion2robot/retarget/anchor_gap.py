@@ -103,7 +103,7 @@ def _foot_capsules(robot) -> tuple[np.ndarray, np.ndarray] | None:
     feet = [int(b) for b in robot.foot_bodies]
     caps = {}
     for p in collision_pairs(robot):
-        if {p.a.body, p.b.body} == set(feet):
+        if {p.a.body, p.b.body} == set(feet) and hasattr(p.b, "radius"):  # capsule-capsule
             caps = {p.a.body: p.a, p.b.body: p.b}
     if not caps:
         return None

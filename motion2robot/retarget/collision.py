@@ -2,8 +2,10 @@
 bounding box (body frame) of the body's collision geoms, radius the larger cross half-extent
 (for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
 for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
-right leg, the two arms and hands, each arm and each hand vs the torso, each hand (the wrist keypoint's body and below) vs every body
-of its own leg. Mesh bodies get capsules fitted to their vertices (:mod:`~motion2robot.retarget.capsule_fit`).
+right leg, the two arms and hands, every body of each arm (hand included) vs the torso, each hand (the wrist keypoint's body and below) vs every body
+of its own leg. Torso bodies may be modelled by their polytope instead
+(:mod:`~motion2robot.retarget.polytope`), whichever of the two containing models is tighter at the
+nominal posture. Mesh bodies get capsules fitted to their vertices (:mod:`~motion2robot.retarget.capsule_fit`).
 
 Boxes get a capsule containing them (over the whole length, radius the cross
 half-diagonal) unless that capsule already touches the other one at the nominal posture, when the
@@ -23,6 +25,7 @@ import mujoco
 import numpy as np
 
 from motion2robot.retarget.capsule_fit import fit_capsule
+from motion2robot.retarget.polytope import BodyPolytope, body_polytope, clearance_np, clearance_sx
 from motion2robot.robot.kinematics import quat_to_mat_np
 from motion2robot.robot.robot import Robot
 
@@ -51,12 +54,13 @@ class BodyCapsule:
 
 @dataclass(frozen=True, eq=False)
 class CapsulePair:
-    """Two capsules to keep apart; ``allowance`` (m) is subtracted from their radii (pairs the
-    nominal posture holds closer than :data:`NOMINAL_CLEARANCE`, whose hulls the capsules overstate)."""
+    """Two capsules, or a capsule and a body's polytope, to keep apart; ``allowance`` (m) is
+    subtracted from their radii (pairs the nominal posture holds closer than
+    :data:`NOMINAL_CLEARANCE`, whose hulls the capsules overstate)."""
 
     name: str
     a: BodyCapsule
-    b: BodyCapsule
+    b: BodyCapsule | BodyPolytope
     allowance: float = 0.0
 
 
@@ -70,12 +74,18 @@ def _geom_box(m: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _mesh_vertices(m: mujoco.MjModel, g: int) -> np.ndarray | None:
-    """A mesh geom's vertices in its body's frame (m), or None for other geom types."""
+    """A mesh geom's vertices in its body's frame (m; those of its convex hull when MuJoCo built
+    one), or None for other geom types."""
     if int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_MESH) or m.geom_dataid[g] < 0:
         return None
     mesh = int(m.geom_dataid[g])
     start, count = int(m.mesh_vertadr[mesh]), int(m.mesh_vertnum[mesh])
-    return m.geom_pos[g] + m.mesh_vert[start:start + count] @ quat_to_mat_np(m.geom_quat[g]).T
+    verts = m.mesh_vert[start:start + count]
+    adr = int(m.mesh_graphadr[mesh])
+    if adr >= 0:  # MuJoCo's convex hull of the mesh: its vertices are all a capsule must hold
+        nv = int(m.mesh_graph[adr])
+        verts = verts[m.mesh_graph[adr + 2 + nv:adr + 2 + 2 * nv]]
+    return m.geom_pos[g] + verts @ quat_to_mat_np(m.geom_quat[g]).T
 
 
 def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCapsule]:
@@ -114,6 +124,16 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
         axis = np.eye(3)[i] * (float(half[i]) if long else max(float(half[i]) - radius, 0.0))
         out[b] = BodyCapsule(b, centre - axis, centre + axis, radius)
     return out
+
+
+def body_polytopes(m: mujoco.MjModel) -> dict[int, BodyPolytope]:
+    """Each body's 26-DOP around its collision geoms (:mod:`~motion2robot.retarget.polytope`)."""
+    geoms: dict[int, list] = {}
+    for g in range(m.ngeom):
+        if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
+            continue
+        geoms.setdefault(int(m.geom_bodyid[g]), []).append((g, _mesh_vertices(m, g)))
+    return {b: body_polytope(m, b, gs) for b, gs in geoms.items()}
 
 
 def _chain(m: mujoco.MjModel, body: int, stop: set[int]) -> list[int]:
@@ -172,13 +192,16 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
     m = robot.model
     caps = body_capsules(m)
     outer = body_capsules(m, contain=True)
+    polys = body_polytopes(m)
     whole = _limbs(robot)
+    chunky = set(whole["torso"])  # bodies that may be modelled by their polytope
     limbs = {k: _largest(v, caps, LIMB_BODIES.get(k.split("_")[-1], 1)) for k, v in whole.items()}
     groups = [("left_leg", "right_leg")]
     for side in ("left", "right"):
         if f"{side}_arm" in limbs:
             limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
-            groups += [(f"{side}_arm", "torso"), (f"{side}_hand", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
+            limbs[f"{side}_whole_arm"] = whole[f"{side}_arm"]
+            groups += [(f"{side}_whole_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
     if "left_arm" in limbs and "right_arm" in limbs:
         groups += [("left_arm", "right_arm"), ("left_hand", "right_hand"), ("left_hand", "right_arm"),
                    ("left_arm", "right_hand")]
@@ -187,6 +210,12 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
     def world(c: BodyCapsule):
         r, p = d.xmat[c.body].reshape(3, 3), d.xpos[c.body]
         return p + r @ c.p0, p + r @ c.p1
+
+    def _clearance(x: BodyCapsule, y: BodyCapsule | BodyPolytope) -> float:
+        """Clearance (m) at the nominal posture, less MARGIN."""
+        if isinstance(y, BodyPolytope):
+            return clearance_np(y, (d.xpos[y.body], d.xmat[y.body].reshape(3, 3)), *world(x), x.radius) - MARGIN
+        return _gap_np(world(x), world(y)) - x.radius - y.radius - MARGIN
 
     out = []
     seen: set[tuple[int, int]] = set()
@@ -197,15 +226,20 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
                         or (min(a, b), max(a, b)) in seen:
                     continue
                 seen.add((min(a, b), max(a, b)))
-                # the containing capsules, unless they touch at the nominal posture (then the inscribed ones)
-                for ca_, cb in ((outer[a], outer[b]), (caps[a], caps[b])):
-                    clearance = _gap_np(world(ca_), world(cb)) - ca_.radius - cb.radius - MARGIN
-                    if clearance > 0:
-                        break
+                # the tightest containing model (both capsules, or the thinner body's capsule and
+                # the other's polytope); the inscribed capsules if all touch at the nominal posture
+                options = [(outer[a], outer[b])]
+                options += [(outer[x], polys[y]) for x, y in ((a, b), (b, a)) if y in chunky]
+                clearance, ca_, cb = max(((_clearance(x, y), x, y) for x, y in options), key=lambda o: o[0])
+                if clearance <= 0:
+                    ca_, cb = caps[a], caps[b]
+                    clearance = _clearance(ca_, cb)
                 if clearance <= 0:
                     continue  # touching at the nominal posture: by design
                 name = f"{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, a)}-{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)}"
-                out.append(CapsulePair(name, ca_, cb, max(0.0, NOMINAL_CLEARANCE - clearance)))
+                # polytopes hug their body (no allowance: it let G1's upper arm 11 mm into the torso)
+                allowance = 0.0 if isinstance(cb, BodyPolytope) else max(0.0, NOMINAL_CLEARANCE - clearance)
+                out.append(CapsulePair(name, ca_, cb, allowance))
     return tuple(out)
 
 
@@ -228,13 +262,20 @@ def closest_parameters(p1, q1, p2, q2):
     return s, _clamp01(t)
 
 
-def pair_gap(pair: CapsulePair, ends, ends_now=None):
-    """Symbolic clearance (m) of a capsule pair minus :data:`MARGIN` (negative = too close).
+def pair_gap(pair: CapsulePair, ends, ends_now=None, frame=None):
+    """Symbolic clearance (m) of a capsule pair minus :data:`MARGIN` (negative = too close): a
+    scalar, or for a polytope pair a column with one row per covering sphere.
 
     ``ends(capsule)`` gives a capsule's two world end points (casadi 3-vectors). With
     ``ends_now`` (the same at the current iterate, without the step) the closest-point parameters
     are taken from those: constants of differentiation (by the envelope theorem their derivative
-    does not change the distance's), which keeps the Jacobian as cheap as two points'."""
+    does not change the distance's), which keeps the Jacobian as cheap as two points'.
+    ``frame(body)``: the body's world position and three axis vectors, for polytope pairs."""
+    if isinstance(pair.b, BodyPolytope):
+        a0, a1 = ends(pair.a)
+        length = float(np.linalg.norm(pair.a.p1 - pair.a.p0))
+        gap = clearance_sx(pair.b, *frame(pair.b.body), a0, a1, length, pair.a.radius)
+        return gap - MARGIN + pair.allowance
     a0, a1 = ends(pair.a)
     b0, b1 = ends(pair.b)
     ref = ends if ends_now is None else ends_now

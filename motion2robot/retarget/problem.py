@@ -23,8 +23,8 @@ Jacobian at ``dx = 0``, the Jacobian by joint axis x lever arm instead of differ
   iterated by the solver as the final exact correction.
 - ``violation(qpos, p) -> violation``: the squared hard-constraint residual alone.
 - ``points(qpos) -> (kp (3,K), corners (3,8), com (3,1), gaps (C,))``: tracked keypoints, sole
-  corners [left 0..3, right 0..3], centre of mass, and self-collision capsule gaps (m; negative =
-  penetration).
+  corners [left 0..3, right 0..3], centre of mass, and self-collision gaps (m; negative =
+  penetration; one per capsule pair, one per covering sphere of a capsule-polytope pair).
 """
 
 from __future__ import annotations
@@ -142,7 +142,11 @@ def _geometry(spec: ProblemSpec, qpos, dx):
     def ends_now(c):
         return point_in_body(tf.frames, c.body, c.p0), point_in_body(tf.frames, c.body, c.p1)
 
-    gaps = [pair_gap(c, ends, ends_now) for c in spec.capsules]
+    def frame(b):
+        origin = tf.point(b, np.zeros(3))
+        return origin, [tf.point(b, e) - origin for e in np.eye(3)]
+
+    gaps = [pair_gap(c, ends, ends_now, frame) for c in spec.capsules]
     return tf, kp, corners, com, gaps
 
 
@@ -283,7 +287,7 @@ def build_functions(spec: ProblemSpec) -> dict[str, ca.Function]:
     bl, bh = lm[1 + 2 * nv:1 + 2 * nv + n], lm[1 + 2 * nv + n:]
     movable = ca.vertcat(ca.SX.ones(6), 1 - ca.logic_or(hq <= bl + eps, hq >= bh - eps))
     Minv = ca.DM([1.0 / spec.length ** 2] * 3 + [1.0] * (nv - 3))
-    Ac = ca.mtimes(Jc.T, Jc) + ca.diag(PROJECTION_MU * Minv)
+    Ac = ca.mtimes(Jc.T, Jc) + ca.diag((PROJECTION_MU + lm[0]) * Minv)  # lm[0]: extra damping
     Ac = ca.diag(movable) @ Ac @ ca.diag(movable) + ca.diag(1 - movable)
     proj_dx = -_chol_solve(Ac, movable * ca.mtimes(Jc.T, c0), list(range(6, nv)) + list(range(6)))
     project = ca.Function("m2r_project", [q, p, lm], [proj_dx, ca.sumsqr(c0)], ["qpos", "p", "lm"], ["dx", "violation"], opts)
