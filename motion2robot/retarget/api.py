@@ -62,6 +62,9 @@ ANCHOR_CLEARANCE = 0.002
 #: more than REPAIR_TOLERANCE (m).
 REPAIR_ROUNDS = 4
 REPAIR_TOLERANCE = 0.001
+#: Newton projection steps at most per round beyond the first two, on the frames still violating
+#: a hard constraint (deep self-collisions need ~10).
+EXTRA_CORRECTIONS = 8
 
 
 @dataclass(frozen=True)
@@ -199,7 +202,8 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
             Q[:, 7:] = smooth_hinges(Q[:, 7:], *targets, human.fps, robot.velocity_limit, lo, hi)
             if root_target is not None:  # quasi-static: the root's acceleration would move the ZMP
                 Q[:, :3] = smooth_to_targets(Q[:, :3], np.inf, root_target, human.fps)
-        Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2, free_at_bounds=rounds > opt.corrections)
+        Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2, free_at_bounds=rounds > opt.corrections,
+                       extra=EXTRA_CORRECTIONS)
         Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)
     pts = pts or _points(problem, Q)
     shift = None

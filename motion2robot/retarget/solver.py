@@ -28,8 +28,12 @@ from motion2robot.retarget.problem import apply_step, tangent_diff
 
 #: Largest change of any state coordinate in one correction step (rad, or m / leg length).
 MAX_CORRECTION = 0.2
-#: Factor on a correction step that made its frame's violation worse, for the retry.
-BACKTRACK = 0.3
+#: Squared hard-constraint residual ((m / leg length)^2) above which a frame gets the extra
+#: correction steps (a 1 mm residual on a 0.3 m leg: 1e-5).
+EXTRA_TOLERANCE = 1e-6
+#: Damping (added to the projection's 1e-8; the Jacobian rows are m / leg length per rad) of the
+#: retry after a correction step that made its frame's violation worse; x10 per further failure.
+RETRY_DAMPING = 1e-4
 #: rad the projection's bounds are widened by when hinges at a bound may move (see ``correct``).
 FREE_SLACK = 1e-6
 
@@ -145,41 +149,58 @@ def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.nd
 
 
 def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-            max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False) -> tuple[np.ndarray, np.ndarray]:
+            max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False,
+            extra: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Newton projection onto the hard constraints (see ``project`` in
-    :mod:`motion2robot.retarget.problem`), ``iterations`` times; hinges stay in their per-frame
+    :mod:`motion2robot.retarget.problem`), ``iterations`` times over every frame, then up to
+    ``extra`` more times over the frames still violating them (squared residual above
+    :data:`EXTRA_TOLERANCE`; deep self-collisions need ~10 steps); hinges stay in their per-frame
     bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation.
+
+    A step that made its frame's violation worse (a far linearisation, or rows that cannot all be
+    zeroed, whose nearly singular system gives a huge step in a useless direction) is undone and
+    replaced by a damped step from there (Levenberg-Marquardt on the projection: damping
+    :data:`RETRY_DAMPING`, x10 per further failure, /10 per success).
 
     free_at_bounds: hinges at a bound take part in the step too (the projection holds them
     otherwise), the step being clipped into the bounds afterwards; for frames stuck with every
     useful hinge at a velocity bound."""
     T, nv = Q.shape[0], problem.spec.nv
     n = nv - 6
-    proj = problem.project_eval(T)
-    lm = np.zeros((T, 1 + 2 * nv + 2 * n))
+    slack = FREE_SLACK if free_at_bounds else 0.0
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
-    dx_prev = np.zeros((T, nv))
-    for k in range(iterations + 1):
-        if k == iterations:  # only the last step's outcome is needed: no new step
-            v = problem.violation_eval(T)(Q, params)[0][:, 0]
-            worse = v > v_prev
-            Q[worse], v[worse] = Q_prev[worse], v_prev[worse]
+    mu = np.zeros(T)  # per-frame extra damping of the projection step
+    for k in range(iterations + extra):
+        rows = np.arange(T) if k < iterations else np.flatnonzero(v_prev > EXTRA_TOLERANCE)
+        if not len(rows):
             break
         lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-        slack = FREE_SLACK if free_at_bounds else 0.0
-        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo - slack
-        lm[:, 1 + 2 * nv + n:] = hi + slack
-        dx, v = proj(Q, params, lm)
+        lm = np.zeros((len(rows), 1 + 2 * nv + 2 * n))
+        lm[:, 0] = mu[rows]
+        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[rows] - slack
+        lm[:, 1 + 2 * nv + n:] = hi[rows] + slack
+        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], lm)
         v = v[:, 0]
-        # a step that did not help (a far linearisation, or an infeasible target): put the frame
-        # back and retry a shorter step in the same direction
-        worse = v > v_prev
-        Q[worse], v[worse], dx[worse] = Q_prev[worse], v_prev[worse], BACKTRACK * dx_prev[worse]
+        worse = v > v_prev[rows]
+        mu[rows] = np.where(worse, np.maximum(mu[rows] * 10.0, RETRY_DAMPING), mu[rows] * 0.1)
+        if worse.any():  # back to the previous iterate, a damped step from there
+            back = rows[worse]
+            Q[back], v[worse] = Q_prev[back], v_prev[back]
+            lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
+            lw = lm[worse]
+            lw[:, 0] = mu[back]
+            lw[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[back] - slack
+            lw[:, 1 + 2 * nv + n:] = hi[back] + slack
+            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], lw)[0]
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
-        Q_prev, v_prev, dx_prev = Q.copy(), v, dx.copy()
-        Q = apply_step(Q, dx)
-        Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
+        Q_prev[rows], v_prev[rows] = Q[rows], v
+        Q[rows] = apply_step(Q[rows], dx)
+        Q[rows, 7:] = np.clip(Q[rows, 7:], lo[rows], hi[rows])
+    # the last steps' outcome: a frame made worse goes back
+    v = problem.violation_eval(T)(Q, params)[0][:, 0]
+    worse = v > v_prev
+    Q[worse], v[worse] = Q_prev[worse], v_prev[worse]
     return Q, v
 
 
