@@ -46,7 +46,7 @@ class Weights:
     contact_xy: float = 1e5
     floor: float = 1e5
     balance: float = 1e5
-    self_collision: float = 1e4
+    self_collision: float = 1e6
     # temporal terms, applied between neighbouring frames by the solver (per-frame units: rad, m)
     velocity: float = 2e-3
     acceleration: float = 5e-3
