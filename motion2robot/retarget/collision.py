@@ -3,7 +3,7 @@ bounding box (body frame) of the body's collision geoms, radius the larger cross
 (for elongated boxes and meshes the segment spans the whole length so the corners stay inside),
 for the largest bodies of each limb (:data:`LIMB_BODIES`), and the pairs that matter: left leg vs
 right leg, the two arms and hands, every body of each arm (hand included) vs the torso, each hand (the wrist keypoint's body and below) vs every body
-of its own leg. Torso bodies may be modelled by their polytope instead
+of its own leg and the largest of the other leg's. Torso bodies may be modelled by their polytope instead
 (:mod:`~motion2robot.retarget.polytope`), whichever of the two containing models is tighter at the
 nominal posture. Mesh bodies get capsules fitted to their vertices (:mod:`~motion2robot.retarget.capsule_fit`).
 
@@ -197,11 +197,12 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
     chunky = set(whole["torso"])  # bodies that may be modelled by their polytope
     limbs = {k: _largest(v, caps, LIMB_BODIES.get(k.split("_")[-1], 1)) for k, v in whole.items()}
     groups = [("left_leg", "right_leg")]
-    for side in ("left", "right"):
+    for side, other in (("left", "right"), ("right", "left")):
         if f"{side}_arm" in limbs:
             limbs[f"{side}_whole_leg"] = whole[f"{side}_leg"]
             limbs[f"{side}_whole_arm"] = whole[f"{side}_arm"]
-            groups += [(f"{side}_whole_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg")]
+            groups += [(f"{side}_whole_arm", "torso"), (f"{side}_hand", f"{side}_whole_leg"),
+                       (f"{side}_hand", f"{other}_leg")]
     if "left_arm" in limbs and "right_arm" in limbs:
         groups += [("left_arm", "right_arm"), ("left_hand", "right_hand"), ("left_hand", "right_arm"),
                    ("left_arm", "right_hand")]
