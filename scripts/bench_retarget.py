@@ -42,9 +42,11 @@ from motion2robot.motion.ops import trim
 from motion2robot.retarget import RetargetOptions, Weights, retarget
 from motion2robot.retarget import compiled as compiled_mod
 from motion2robot.retarget import lanes
+from motion2robot.retarget.contacts import HEEL_LIFT, contact_labels
 from motion2robot.retarget.metrics import acceptance
 from motion2robot.retarget.scale import Scale
 from motion2robot.robot import load_robot
+from motion2robot.robot_motion import RobotMotion
 from motion2robot.validate import CheckOptions, check
 
 #: Clips meant to be quasi-static (standing, waving, reaching, bowing): balance on and judged.
@@ -207,7 +209,7 @@ def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
             f"{'CoM in %':>8s} {'kp mm':>6s} {'revers':>6s} {'acc/s2':>7s} check (quasi-static)")
     print(head)
     tot = {"frames": 0, "limits": 0, "depth": 0.0, "contact": 0, "slow": 0.0, "coll": 0.0, "speed": 0.0, "com_bad": 0,
-           "reversals": 0, "acc": 0.0, "acc_fail": 0}
+           "reversals": 0, "acc": 0.0, "acc_fail": 0, "heel_up": 0, "human_contact": 0, "human_slow": 0.0}
     for name, h in items:
         quasi = Path(name.split("#")[0]).name in QUASI_STATIC
         try:
@@ -234,6 +236,13 @@ def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
         tot["depth"] = max(tot["depth"], a["sole_depth_mm"])
         tot["contact"] += a["contact_frames"]
         tot["slow"] += a["contact_slow_pct"] / 100 * a["contact_frames"]
+        tot["heel_up"] += m.meta.get("contact_frames_heel_up", 0)
+        # the same figure over the human's own labels (frames on the toes with the heel up included)
+        human_labels = contact_labels(h)[0].astype(int).tolist()
+        ah = acceptance(RobotMotion(m.qpos, m.fps, m.joint_names, m.robot, {**m.meta, "contacts": human_labels}),
+                        robot, collisions=False)
+        tot["human_contact"] += ah["contact_frames"]
+        tot["human_slow"] += ah["contact_slow_pct"] / 100 * ah["contact_frames"]
         tot["coll"] = max(tot["coll"], a["self_collision_mm"])
         tot["speed"] = max(tot["speed"], a["speed_ratio"])
         if quasi:
@@ -243,6 +252,9 @@ def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
           f"{'quasi-static clips with CoM outside: ' + str(tot['com_bad'])}")
     print(f"{'':44s} velocity reversals (|v| > 1 rad/s) in total: {tot['reversals']}; peak acceleration {tot['acc']:.1f} rad/s^2; "
           f"quasi-static clips failing the acceleration check: {tot['acc_fail']}")
+    human = 100 * tot["human_slow"] / max(tot["human_contact"], 1)
+    print(f"{'':44s} contact frames judged (planted): {tot['contact']}; human contact frames with the heel more than "
+          f"{100 * HEEL_LIFT:.0f} cm up, not planted: {tot['heel_up']}; over the human's own labels: {human:.1f} % slow")
 
 
 def main() -> int:

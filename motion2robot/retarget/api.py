@@ -41,7 +41,7 @@ from motion2robot.retarget.constraints import (
     support_margin,
     support_planes,
 )
-from motion2robot.retarget.contacts import anchor_soles, contact_labels
+from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted
 from motion2robot.retarget.costs import FRAME_TERMS, Weights
 from motion2robot.retarget.problem import HMAX
 from motion2robot.retarget.root_pass import root_shift
@@ -155,7 +155,11 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     kp = scaled_keypoints(human.positions, scale)
     if opt.contacts:
         labels, label_source = contact_labels(human)
+        heel_up = int(labels.sum())
+        labels = planted(labels, human)
+        heel_up -= int(labels.sum())
     else:
+        heel_up = 0
         labels, label_source = np.zeros((T, 2), dtype=bool), "off"
     lo, hi = robot.lower, robot.upper
     if opt.solver not in ("fast", "ipopt"):
@@ -226,6 +230,7 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
         "source": human.meta.get("source"), "clip": human.meta.get("clip"), "prompt": human.meta.get("prompt"),
         "format": human.meta.get("format"), "scale": scale.as_dict(), "robot_hash": robot.model_hash,
         "contacts": labels.astype(int).tolist(), "contacts_source": label_source,
+        "contact_frames_heel_up": heel_up,
         "human_root_xy": kp[:, 0, :2].tolist(), "balance": bool(opt.balance), "support_margin": margin,
         "solver": {
             "method": ("batched Gauss-Newton/LM (" + problem.backend + " backend)" if opt.solver == "fast"
