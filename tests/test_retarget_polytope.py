@@ -123,3 +123,18 @@ def test_sphere_cover_holds_the_capsule():
     v = r * v / np.linalg.norm(v, axis=1)[:, None]
     surface = a + s[:, None] * (b - a) + v                       # the cylinder part's surface
     assert np.all(np.linalg.norm(surface[:, None] - centres[None], axis=2).min(axis=1) <= rs + 1e-12)
+
+
+@pytest.mark.parametrize("name", ["box", "sphere", "capsule", "cylinder", "ellipsoid"])
+def test_containing_capsule_holds_each_primitive(name):
+    """The capsule fitted to a primitive's hull points (collision._geom_points) holds the whole
+    geom: a flat cylinder's bounding-box capsule, a sphere, cut its rim (Unitree H1 hip yaw)."""
+    from motion2robot.retarget.anchor_gap import segment_distance
+    from motion2robot.retarget.capsule_fit import fit_capsule
+    from motion2robot.retarget.collision import _geom_points
+
+    line = next(x for x in XML.splitlines() if f'name="{name}"' in x)
+    alone = mujoco.MjModel.from_xml_string(f"<mujoco><worldbody><body name='b'>{line}</body></worldbody></mujoco>")
+    p0, p1, r = fit_capsule(_geom_points(alone, 0))
+    pts = _surface_samples(alone, 0, n=20000)
+    assert np.all(segment_distance(pts, pts, p0, p1) <= r + 1e-9)

@@ -88,15 +88,59 @@ def _mesh_vertices(m: mujoco.MjModel, g: int) -> np.ndarray | None:
     return m.geom_pos[g] + verts @ quat_to_mat_np(m.geom_quat[g]).T
 
 
+#: Geom types whose bounding-box capsule need not hold them.
+_FLAT = {int(mujoco.mjtGeom.mjGEOM_CYLINDER), int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)}
+#: Points per circle of :func:`_geom_points`.
+_RIM = 72
+
+
+def _fibonacci(n: int) -> np.ndarray:
+    """n roughly even unit vectors."""
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = np.pi * (1 + 5 ** 0.5) * i
+    rho = np.sqrt(1 - z * z)
+    return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1)
+
+
+def _geom_points(m: mujoco.MjModel, g: int) -> np.ndarray:
+    """Points in the body frame whose convex hull holds geom ``g``: a mesh's vertices, a box's
+    corners, a cylinder's two rims as circumscribed 72-gons; spheres, capsule ends and ellipsoids
+    as 400 directions pushed out by 3 % (the largest gap between those directions is ~0.2 rad, whose
+    circumscribing factor 1/cos(0.1) is 1.005)."""
+    mesh = _mesh_vertices(m, g)
+    if mesh is not None:
+        return mesh
+    size, t = m.geom_size[g], int(m.geom_type[g])
+    ang = np.linspace(0, 2 * np.pi, _RIM, endpoint=False)
+    ring = np.stack([np.cos(ang), np.sin(ang), np.zeros(_RIM)], axis=1) / np.cos(np.pi / _RIM)
+    ball = 1.03 * _fibonacci(400)
+    if t == mujoco.mjtGeom.mjGEOM_BOX:
+        local = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * size
+    elif t == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        local = np.concatenate([size[0] * ring + [0, 0, h] for h in (-size[1], size[1])])
+    elif t == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        local = np.concatenate([size[0] * ball + [0, 0, h] for h in (-size[1], size[1])])
+    elif t == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+        local = ball * size
+    else:  # sphere; anything else by its bounding sphere
+        local = ball * (size[0] if t == mujoco.mjtGeom.mjGEOM_SPHERE else float(m.geom_rbound[g]))
+    return m.geom_pos[g] + local @ quat_to_mat_np(m.geom_quat[g]).T
+
+
 def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCapsule]:
     """Each body's capsule: along the longest axis of the union of its collision geoms' bounding
     boxes (body frame), radius the larger cross half-extent; with ``contain``, boxes and meshes get the
     capsule over their whole length with the cross half-diagonal as radius (it holds the corners),
     and bodies whose collision geoms are all meshes the capsule fitted to their vertices
-    (:func:`~motion2robot.retarget.capsule_fit.fit_capsule`)."""
+    (:func:`~motion2robot.retarget.capsule_fit.fit_capsule`), as are bodies with a cylinder or an
+    ellipsoid (on points of their geoms whose hull holds them, :func:`_geom_points`: the
+    bounding-box capsule of a flat cylinder, a sphere, cut its rim: Unitree H1's hip-yaw links
+    went 13 mm into each other)."""
     boxes: dict[int, list] = {}
     rounded: dict[int, bool] = {}
     verts: dict[int, list] = {}
+    geoms: dict[int, list] = {}
     for g in range(m.ngeom):
         if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
             continue
@@ -104,10 +148,16 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
         boxes.setdefault(b, []).append(_geom_box(m, g))
         rounded[b] = rounded.get(b, True) and int(m.geom_type[g]) in _ROUND
         verts.setdefault(b, []).append(_mesh_vertices(m, g))
+        geoms.setdefault(b, []).append(g)
+    flat = {b: gs for b, gs in geoms.items() if any(int(m.geom_type[g]) in _FLAT for g in gs)}
     out = {}
     for b, bs in boxes.items():
         if contain and all(v is not None for v in verts[b]):  # meshes only: fitted to their vertices
             p0, p1, r = fit_capsule(np.concatenate(verts[b]))
+            out[b] = BodyCapsule(b, p0, p1, r)
+            continue
+        if contain and b in flat:  # a cylinder or ellipsoid: the bounding-box capsule may cut its rim
+            p0, p1, r = fit_capsule(np.concatenate([_geom_points(m, g) for g in flat[b]]))
             out[b] = BodyCapsule(b, p0, p1, r)
             continue
         lo = np.min([x[0] for x in bs], axis=0)
@@ -127,7 +177,7 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
 
 
 def body_polytopes(m: mujoco.MjModel) -> dict[int, BodyPolytope]:
-    """Each body's 26-DOP around its collision geoms (:mod:`~motion2robot.retarget.polytope`)."""
+    """Each body's 14-DOP around its collision geoms (:mod:`~motion2robot.retarget.polytope`)."""
     geoms: dict[int, list] = {}
     for g in range(m.ngeom):
         if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
