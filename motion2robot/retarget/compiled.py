@@ -11,6 +11,9 @@ The generated C source is hashed; the library lives in ``$MOTION2ROBOT_CACHE`` (
 ``~/.cache/motion2robot``) as ``lanes/<hash>.so`` or ``casadi/<hash>.so``, so a second process
 (or a second run) only loads it. The hash covers the compiler flags, which name the vector
 instruction set, so a cache shared by different machines never hands one a library it cannot run.
+A lane library is also recorded under the digest of what its code is made from
+(:mod:`~motion2robot.retarget.recipe`, ``lanes/recipe-<digest>.json``: the library's file and the
+functions' signatures), so later processes load it without building the casadi graph at all.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -32,6 +36,7 @@ import numpy as np
 
 from motion2robot.retarget import lanes
 from motion2robot.retarget.problem import ProblemSpec, build_functions, build_spec
+from motion2robot.retarget.recipe import recipe_digest
 from motion2robot.robot.robot import Robot
 
 CFLAGS = ("-O1", "-fPIC", "-shared")  # casadi's code: -O2 runs ~10 % faster but compiles ~2x longer
@@ -40,6 +45,8 @@ LANE_CFLAGS = ("-O1", "-fPIC", "-ffp-contract=off")
 #: Inputs shared by all frames (the term weights ``w``), per function.
 SHARED_INPUTS = {"step": (2,), "cost": (2,)}
 BACKENDS = ("auto", "lanes", "c", "vm")
+#: The functions of :func:`~motion2robot.retarget.problem.build_functions`.
+FUNCTIONS = ("step", "cost", "project", "violation", "points")
 
 
 def cache_dir() -> Path:
@@ -58,16 +65,18 @@ class CompiledProblem:
     ``backend``), the spec, and how long building/compiling took (s)."""
 
     spec: ProblemSpec
-    functions: dict[str, ca.Function]
+    functions: dict[str, ca.Function]   # empty when the lane library was found by its recipe
     backend: str
     build_s: float
     compile_s: float
     cached: bool
     library: ctypes.CDLL | None = None  # the lane code, backend "lanes"
+    signatures: dict | None = None      # name -> (C name, input sizes, output sizes), lane code
 
     @functools.lru_cache(maxsize=16)
     def _lane(self, name: str) -> lanes.LaneEval:
-        return lanes.LaneEval(self.library, self.functions[name], SHARED_INPUTS.get(name, ()))
+        f = self.functions.get(name) or tuple(self.signatures[name])
+        return lanes.LaneEval(self.library, f, SHARED_INPUTS.get(name, ()))
 
     @functools.lru_cache(maxsize=40)
     def _mapped(self, name: str, frames: int) -> MappedEval:
@@ -195,6 +204,34 @@ def _casadi_library(functions: dict[str, ca.Function]) -> tuple[Path, bool, floa
         return lib, cached, time.perf_counter() - t1
 
 
+def _recipe_path(spec: ProblemSpec) -> Path:
+    width, isa_flags = lanes.isa()
+    build = " ".join((*LANE_CFLAGS, *isa_flags, f"lanes={width}"))
+    return cache_dir() / "lanes" / f"recipe-{recipe_digest(spec, build)}.json"
+
+
+def _recipe_lookup(recipe: Path) -> tuple[Path, dict] | None:
+    """The library and signatures recorded under ``recipe``, if both are there and readable."""
+    try:
+        info = json.loads(recipe.read_text())
+        lib = recipe.parent / Path(info["library"]).name
+        sigs = {name: (str(c), [int(x) for x in nin], [int(x) for x in nout])
+                for name, (c, nin, nout) in info["signatures"].items()}
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return (lib, sigs) if lib.is_file() and set(sigs) == set(FUNCTIONS) else None
+
+
+def _recipe_record(recipe: Path, lib: Path, functions: dict[str, ca.Function]) -> None:
+    info = {"library": lib.name, "signatures": {name: lanes.signature(f) for name, f in functions.items()}}
+    part = recipe.with_name(recipe.name + f".{os.getpid()}.tmp")
+    try:
+        part.write_text(json.dumps(info))
+        part.replace(recipe)  # atomic, like the library
+    except OSError:
+        pass  # a read-only cache: the next process builds the graph again
+
+
 @functools.lru_cache(maxsize=8)
 def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
     """The robot's problem, code-generated and compiled (cached on disk): ``backend`` "auto"
@@ -204,14 +241,22 @@ def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
         raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(BACKENDS)}")
     t0 = time.perf_counter()
     spec = build_spec(robot)
+    no_compiler = backend == "vm" or (backend == "auto" and _compiler() is None)
+    recipe = _recipe_path(spec)
+    if backend in ("auto", "lanes") and not no_compiler:
+        found = _recipe_lookup(recipe)
+        if found is not None:  # compiled before from the same recipe: no graph to build
+            lib, sigs = found
+            return CompiledProblem(spec, {}, "lanes", time.perf_counter() - t0, 0.0, True, ctypes.CDLL(str(lib)), sigs)
     functions = build_functions(spec)
     build_s = time.perf_counter() - t0
-    if backend == "vm" or (backend == "auto" and _compiler() is None):
+    if no_compiler:
         return CompiledProblem(spec, functions, "vm", build_s, 0.0, False)
     if backend in ("auto", "lanes"):
         built = _lane_library(functions)
         if built is not None:
             lib, cached, compile_s = built
+            _recipe_record(recipe, lib, functions)
             return CompiledProblem(spec, functions, "lanes", build_s, compile_s, cached, ctypes.CDLL(str(lib)))
         if backend == "lanes":
             raise ValueError("lane code cannot be generated for this robot's functions; use backend 'c'")

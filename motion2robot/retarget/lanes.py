@@ -148,18 +148,25 @@ def _literal(x: float) -> str:
 _DP = ctypes.POINTER(ctypes.c_double)
 
 
+def signature(f: ca.Function) -> tuple[str, list[int], list[int]]:
+    """(name, nonzeros of each input, of each output) of ``f``: all :class:`LaneEval` needs."""
+    return f.name(), [f.nnz_in(i) for i in range(f.n_in())], [f.nnz_out(i) for i in range(f.n_out())]
+
+
 class LaneEval:
     """Calls the generated function ``name`` of library ``lib`` (made from casadi function ``f``)
     on numpy arrays: each input (T, nnz_i) (or (nnz_i,) when shared), any shape that reshapes to
     it; returns the outputs as new (T, nnz_j) arrays."""
 
-    def __init__(self, lib: ctypes.CDLL, f: ca.Function, shared: tuple[int, ...] = ()):
-        self._fn = getattr(lib, f.name())
+    def __init__(self, lib: ctypes.CDLL, f: ca.Function | tuple[str, list[int], list[int]],
+                 shared: tuple[int, ...] = ()):
+        """``f``: the casadi function, or its signature (name, input sizes, output sizes) as
+        :func:`signature` gives it."""
+        name, self.nnz_in, self.nnz_out = signature(f) if isinstance(f, ca.Function) else f
+        self._fn = getattr(lib, name)
         self._fn.argtypes = [ctypes.c_int, ctypes.POINTER(_DP), ctypes.POINTER(_DP)]
         self._fn.restype = None
-        self.name = f.name()
-        self.nnz_in = [f.nnz_in(i) for i in range(f.n_in())]
-        self.nnz_out = [f.nnz_out(i) for i in range(f.n_out())]
+        self.name = name
         self.shared = shared
 
     def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
