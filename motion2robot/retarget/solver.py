@@ -29,7 +29,7 @@ from motion2robot.retarget.problem import apply_step, tangent_diff
 #: Largest change of any state coordinate in one correction step (rad, or m / leg length).
 MAX_CORRECTION = 0.2
 #: Squared hard-constraint residual ((m / leg length)^2) above which a frame gets the extra
-#: correction steps (a 1 mm residual on a 0.3 m leg: 1e-5).
+#: correction steps (0.3 mm on a 0.3 m leg).
 EXTRA_TOLERANCE = 1e-6
 #: Damping (added to the projection's 1e-8; the Jacobian rows are m / leg length per rad) of the
 #: retry after a correction step that made its frame's violation worse; x10 per further failure.
@@ -171,16 +171,21 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
     mu = np.zeros(T)  # per-frame extra damping of the projection step
+
+    def settings(rows: np.ndarray) -> np.ndarray:
+        """The projection's ``lm`` input of frames ``rows``: damping, their hinge box."""
+        lm = np.zeros((len(rows), 1 + 2 * nv + 2 * n))
+        lm[:, 0] = mu[rows]
+        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[rows] - slack
+        lm[:, 1 + 2 * nv + n:] = hi[rows] + slack
+        return lm
+
     for k in range(iterations + extra):
         rows = np.arange(T) if k < iterations else np.flatnonzero(v_prev > EXTRA_TOLERANCE)
         if not len(rows):
             break
         lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-        lm = np.zeros((len(rows), 1 + 2 * nv + 2 * n))
-        lm[:, 0] = mu[rows]
-        lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[rows] - slack
-        lm[:, 1 + 2 * nv + n:] = hi[rows] + slack
-        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], lm)
+        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], settings(rows))
         v = v[:, 0]
         worse = v > v_prev[rows]
         mu[rows] = np.where(worse, np.maximum(mu[rows] * 10.0, RETRY_DAMPING), mu[rows] * 0.1)
@@ -188,11 +193,7 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
             back = rows[worse]
             Q[back], v[worse] = Q_prev[back], v_prev[back]
             lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-            lw = lm[worse]
-            lw[:, 0] = mu[back]
-            lw[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[back] - slack
-            lw[:, 1 + 2 * nv + n:] = hi[back] + slack
-            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], lw)[0]
+            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], settings(back))[0]
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
         Q_prev[rows], v_prev[rows] = Q[rows], v
         Q[rows] = apply_step(Q[rows], dx)
