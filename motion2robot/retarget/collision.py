@@ -88,6 +88,15 @@ def _mesh_vertices(m: mujoco.MjModel, g: int) -> np.ndarray | None:
     return m.geom_pos[g] + verts @ quat_to_mat_np(m.geom_quat[g]).T
 
 
+def collision_geoms(m: mujoco.MjModel) -> dict[int, list[int]]:
+    """Each body's collision geoms (contype or conaffinity set; the world body's left out)."""
+    out: dict[int, list[int]] = {}
+    for g in range(m.ngeom):
+        if (m.geom_contype[g] or m.geom_conaffinity[g]) and m.geom_bodyid[g] != 0:
+            out.setdefault(int(m.geom_bodyid[g]), []).append(g)
+    return out
+
+
 #: Geom types whose bounding-box capsule need not hold them.
 _FLAT = {int(mujoco.mjtGeom.mjGEOM_CYLINDER), int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)}
 #: Points per circle of :func:`_geom_points`.
@@ -137,27 +146,18 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
     ellipsoid (on points of their geoms whose hull holds them, :func:`_geom_points`: the
     bounding-box capsule of a flat cylinder, a sphere, cut its rim: Unitree H1's hip-yaw links
     went 13 mm into each other)."""
-    boxes: dict[int, list] = {}
-    rounded: dict[int, bool] = {}
-    verts: dict[int, list] = {}
-    geoms: dict[int, list] = {}
-    for g in range(m.ngeom):
-        if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
-            continue
-        b = int(m.geom_bodyid[g])
-        boxes.setdefault(b, []).append(_geom_box(m, g))
-        rounded[b] = rounded.get(b, True) and int(m.geom_type[g]) in _ROUND
-        verts.setdefault(b, []).append(_mesh_vertices(m, g))
-        geoms.setdefault(b, []).append(g)
-    flat = {b: gs for b, gs in geoms.items() if any(int(m.geom_type[g]) in _FLAT for g in gs)}
     out = {}
-    for b, bs in boxes.items():
-        if contain and all(v is not None for v in verts[b]):  # meshes only: fitted to their vertices
-            p0, p1, r = fit_capsule(np.concatenate(verts[b]))
+    for b, geoms in collision_geoms(m).items():
+        bs = [_geom_box(m, g) for g in geoms]
+        verts = [_mesh_vertices(m, g) for g in geoms]
+        rounded = all(int(m.geom_type[g]) in _ROUND for g in geoms)
+        if contain and all(v is not None for v in verts):  # meshes only: fitted to their vertices
+            p0, p1, r = fit_capsule(np.concatenate(verts))
             out[b] = BodyCapsule(b, p0, p1, r)
             continue
-        if contain and b in flat:  # a cylinder or ellipsoid: the bounding-box capsule may cut its rim
-            p0, p1, r = fit_capsule(np.concatenate([_geom_points(m, g) for g in flat[b]]))
+        if contain and any(int(m.geom_type[g]) in _FLAT for g in geoms):
+            # a cylinder or ellipsoid: the bounding-box capsule may cut its rim
+            p0, p1, r = fit_capsule(np.concatenate([_geom_points(m, g) for g in geoms]))
             out[b] = BodyCapsule(b, p0, p1, r)
             continue
         lo = np.min([x[0] for x in bs], axis=0)
@@ -169,7 +169,7 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
         # geom): a capsule over the whole bounding-box length (for a capsule geom, longer than
         # it by its radius at each end: on the safe side)
         long = half[i] >= ELONGATED * radius
-        if contain and not rounded[b]:  # boxes/meshes: a capsule containing the box's corners
+        if contain and not rounded:  # boxes/meshes: a capsule containing the box's corners
             radius, long = float(np.linalg.norm(np.delete(half, i))), True
         axis = np.eye(3)[i] * (float(half[i]) if long else max(float(half[i]) - radius, 0.0))
         out[b] = BodyCapsule(b, centre - axis, centre + axis, radius)
@@ -178,12 +178,7 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
 
 def body_polytopes(m: mujoco.MjModel) -> dict[int, BodyPolytope]:
     """Each body's 14-DOP around its collision geoms (:mod:`~motion2robot.retarget.polytope`)."""
-    geoms: dict[int, list] = {}
-    for g in range(m.ngeom):
-        if (m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0) or m.geom_bodyid[g] == 0:
-            continue
-        geoms.setdefault(int(m.geom_bodyid[g]), []).append((g, _mesh_vertices(m, g)))
-    return {b: body_polytope(m, b, gs) for b, gs in geoms.items()}
+    return {b: body_polytope(m, b, [(g, _mesh_vertices(m, g)) for g in gs]) for b, gs in collision_geoms(m).items()}
 
 
 def _chain(m: mujoco.MjModel, body: int, stop: set[int]) -> list[int]:
