@@ -176,3 +176,30 @@ def test_smoothing_can_be_turned_off(op3):
         assert np.all(np.abs(np.diff(m.qpos[:, 7:], axis=0)) * m.fps <= op3.velocity_limit + 1e-9)
     # the servo-aware smoothing is what keeps this arm raise within the rotor-inertia limit
     assert peak_acceleration(smooth.qpos[:, 7:], smooth.fps) < peak_acceleration(raw.qpos[:, 7:], raw.fps)
+
+
+def test_native_root_steps_match_numpy():
+    """apply_step / tangent_diff in C give numpy's numbers (the small-angle branch included)."""
+    from motion2robot.retarget import native
+    from motion2robot.retarget.problem import apply_step, tangent_diff
+
+    if native.library() is None:
+        pytest.skip("no C compiler")
+    rng = np.random.default_rng(3)
+    T, nq = 40, 27
+    a, b = rng.normal(size=(T, nq)), rng.normal(size=(T, nq))
+    for q in (a, b):
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    b[::3, 3:7] = a[::3, 3:7]
+    dx = rng.normal(size=(T, nq - 1)) * 0.3
+    dx[::4, 3:6] = 0.0
+    fast = (apply_step(a, dx), tangent_diff(a, b))
+    lib = native.library
+    native.library = lambda: None
+    try:
+        slow = (apply_step(a, dx), tangent_diff(a, b))
+    finally:
+        native.library = lib
+    assert np.array_equal(fast[0], slow[0])
+    assert np.allclose(fast[1], slow[1], rtol=0, atol=1e-14)
+    assert np.allclose(np.linalg.norm(fast[0][:, 3:7], axis=1), 1.0)

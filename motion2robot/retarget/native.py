@@ -1,6 +1,9 @@
 """Sequential loops over the frames, in C: the pentadiagonal solve of the smoothing and its
-reweighting loop (:mod:`~motion2robot.retarget.smoothing`) and the forward-backward velocity clamp
-(:mod:`~motion2robot.retarget.constraints`). Python loops over the frames cost more than the rest
+reweighting loop (:mod:`~motion2robot.retarget.smoothing`), the forward-backward velocity clamp
+(:mod:`~motion2robot.retarget.constraints`), and the root-quaternion arithmetic of the solver's
+steps (:func:`~motion2robot.retarget.problem.apply_step`,
+:func:`~motion2robot.retarget.problem.tangent_diff`: ~30 small numpy operations per call on a
+few hundred frames, called every iteration). Python loops over the frames cost more than the rest
 of the retargeting; these kernels are compiled once (cached beside the casadi library, see
 :mod:`~motion2robot.retarget.compiled`) and loaded with ctypes. Without a C compiler the callers
 fall back to their numpy versions (same numbers).
@@ -110,6 +113,47 @@ void m2r_clamp_velocity(int T, int n, double *q, const double *step) {
             *x = *x < lo ? lo : (*x > hi ? hi : *x);
         }
 }
+
+/* Hamilton product o = a b of wxyz quaternions, in the order of problem.quat_mul. */
+static void quat_mul(const double *a, const double *b, double *o) {
+    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+/* problem.apply_step: q (T, nq) moved by dx (T, nq - 1) into out (T, nq). */
+void m2r_apply_step(int T, int nq, const double *q, const double *dx, double *out) {
+    int nv = nq - 1;
+    for (int t = 0; t < T; ++t) {
+        const double *a = q + t * nq, *d = dx + t * nv;
+        double *o = out + t * nq, b[4], r[4];
+        for (int i = 0; i < 3; ++i) o[i] = a[i] + d[i];
+        double ang = sqrt(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]), half = 0.5 * ang;
+        double s = ang > 1e-12 ? sin(half) / fmax(ang, 1e-12) : 0.5;
+        b[0] = cos(half); b[1] = s * d[3]; b[2] = s * d[4]; b[3] = s * d[5];
+        quat_mul(a + 3, b, r);
+        double n = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
+        for (int i = 0; i < 4; ++i) o[3 + i] = r[i] / n;
+        for (int i = 7; i < nq; ++i) o[i] = a[i] + d[i - 1];
+    }
+}
+
+/* problem.tangent_diff: d (T, nq - 1) = a - b (T, nq), the root rotation as the rotation vector
+   of conj(b) a. */
+void m2r_tangent_diff(int T, int nq, const double *a, const double *b, double *d) {
+    int nv = nq - 1;
+    for (int t = 0; t < T; ++t) {
+        const double *x = a + t * nq, *y = b + t * nq;
+        double *o = d + t * nv, c[4] = {y[3], -y[4], -y[5], -y[6]}, r[4];
+        for (int i = 0; i < 3; ++i) o[i] = x[i] - y[i];
+        quat_mul(c, x + 3, r);
+        if (r[0] < 0) for (int i = 0; i < 4; ++i) r[i] = -r[i];
+        double s = sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3]), ang = 2 * atan2(s, r[0]);
+        for (int i = 0; i < 3; ++i) o[3 + i] = s > 1e-12 ? r[1 + i] * ang / fmax(s, 1e-12) : 2 * r[1 + i];
+        for (int i = 7; i < nq; ++i) o[i - 1] = x[i] - y[i];
+    }
+}
 """
 
 _DP = ctypes.POINTER(ctypes.c_double)
@@ -143,6 +187,9 @@ def library() -> ctypes.CDLL | None:
     dll.m2r_smooth_irls.restype = None
     dll.m2r_clamp_velocity.argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP]
     dll.m2r_clamp_velocity.restype = None
+    for name in ("m2r_apply_step", "m2r_tangent_diff"):
+        getattr(dll, name).argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP, _DP]
+        getattr(dll, name).restype = None
     return dll
 
 
@@ -190,3 +237,24 @@ def clamp_velocity(q: np.ndarray, step: np.ndarray) -> np.ndarray | None:
     s = np.ascontiguousarray(np.broadcast_to(step, out.shape[1:]), dtype=np.float64)
     dll.m2r_clamp_velocity(out.shape[0], out.shape[1], _ptr(out), _ptr(s))
     return out
+
+
+def _pairwise(name: str, a: np.ndarray, b: np.ndarray, width: int) -> np.ndarray | None:
+    """Run kernel ``name`` on (T, nq) ``a`` and (T, *) ``b`` into a new (T, width) array."""
+    dll = library()
+    if dll is None:
+        return None
+    x, y = (np.ascontiguousarray(v, dtype=np.float64) for v in (a, b))
+    out = np.empty((x.shape[0], width))
+    getattr(dll, name)(x.shape[0], x.shape[1], _ptr(x), _ptr(y), _ptr(out))
+    return out
+
+
+def apply_step(qpos: np.ndarray, dx: np.ndarray) -> np.ndarray | None:
+    """C version of :func:`~motion2robot.retarget.problem.apply_step`, or None without the kernels."""
+    return _pairwise("m2r_apply_step", qpos, dx, qpos.shape[1])
+
+
+def tangent_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """C version of :func:`~motion2robot.retarget.problem.tangent_diff`, or None without the kernels."""
+    return _pairwise("m2r_tangent_diff", a, b, a.shape[1] - 1)

@@ -35,6 +35,7 @@ import casadi as ca
 import numpy as np
 
 from motion2robot.errors import RobotConfigError
+from motion2robot.retarget import native
 from motion2robot.retarget.collision import CapsulePair, collision_pairs, pair_gap
 from motion2robot.retarget.costs import FRAME_TERMS, HARD_TERMS
 from motion2robot.robot.kinematics import TangentFrames, point_in_body
@@ -326,7 +327,11 @@ def quat_to_rotvec(q: np.ndarray) -> np.ndarray:
 
 
 def apply_step(qpos: np.ndarray, dx: np.ndarray) -> np.ndarray:
-    """Move (T, nq) qpos by (T, nv) tangent steps: position add, root-local rotation, hinge add."""
+    """Move (T, nq) qpos by (T, nv) tangent steps: position add, root-local rotation, hinge add
+    (the C kernel of :mod:`~motion2robot.retarget.native` when built; the same arithmetic)."""
+    fast = native.apply_step(qpos, dx)
+    if fast is not None:
+        return fast
     out = qpos.copy()
     out[:, :3] += dx[:, :3]
     quat = quat_mul(qpos[:, 3:7], rotvec_to_quat(dx[:, 3:6]))
@@ -336,7 +341,12 @@ def apply_step(qpos: np.ndarray, dx: np.ndarray) -> np.ndarray:
 
 
 def tangent_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(T, nv) tangent difference a - b of (T, nq) qpos (root rotation in a's... b's local frame)."""
+    """(T, nv) tangent difference a - b of (T, nq) qpos (root rotation in b's local frame; the C
+    kernel of :mod:`~motion2robot.retarget.native` when built: the same arithmetic, equal to the
+    last bit or so (the C library's atan2))."""
+    fast = native.tangent_diff(a, b)
+    if fast is not None:
+        return fast
     d = np.empty((a.shape[0], a.shape[1] - 1))
     d[:, :3] = a[:, :3] - b[:, :3]
     conj = b[:, 3:7] * np.array([1, -1, -1, -1])
