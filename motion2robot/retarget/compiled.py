@@ -242,8 +242,9 @@ def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
     t0 = time.perf_counter()
     spec = build_spec(robot)
     no_compiler = backend == "vm" or (backend == "auto" and _compiler() is None)
-    recipe = _recipe_path(spec)
-    if backend in ("auto", "lanes") and not no_compiler:
+    lane_code = backend in ("auto", "lanes") and not no_compiler
+    recipe = _recipe_path(spec) if lane_code else None  # the digest reads every module's source
+    if lane_code:
         found = _recipe_lookup(recipe)
         if found is not None:  # compiled before from the same recipe: no graph to build
             lib, sigs = found
@@ -252,7 +253,7 @@ def compiled_problem(robot: Robot, backend: str = "auto") -> CompiledProblem:
     build_s = time.perf_counter() - t0
     if no_compiler:
         return CompiledProblem(spec, functions, "vm", build_s, 0.0, False)
-    if backend in ("auto", "lanes"):
+    if lane_code:
         built = _lane_library(functions)
         if built is not None:
             lib, cached, compile_s = built
