@@ -46,7 +46,7 @@ LANE_CFLAGS = ("-O1", "-fPIC", "-ffp-contract=off")
 SHARED_INPUTS = {"step": (2,), "cost": (2,)}
 BACKENDS = ("auto", "lanes", "c", "vm")
 #: The functions of :func:`~motion2robot.retarget.problem.build_functions`.
-FUNCTIONS = ("step", "cost", "project", "violation", "points")
+FUNCTIONS = ("step", "cost", "project", "settle", "violation", "points")
 
 
 def cache_dir() -> Path:
@@ -60,7 +60,7 @@ def _compiler() -> str | None:
 
 @dataclass(frozen=True, eq=False)
 class CompiledProblem:
-    """A robot's problem ready to evaluate: the ``step``/``cost``/``project``/``violation``/``points``
+    """A robot's problem ready to evaluate: the ``step``/``cost``/``project``/``settle``/``violation``/``points``
     casadi functions of :func:`~motion2robot.retarget.problem.build_functions` (compiled per
     ``backend``), the spec, and how long building/compiling took (s)."""
 
@@ -99,6 +99,9 @@ class CompiledProblem:
 
     def project_eval(self, frames: int):
         return self.evaluator("project", frames)
+
+    def settle_eval(self, frames: int):
+        return self.evaluator("settle", frames)
 
     def violation_eval(self, frames: int):
         return self.evaluator("violation", frames)

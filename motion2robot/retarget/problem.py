@@ -4,7 +4,7 @@ Decision variables per frame: ``qpos`` (root xyz, root wxyz, n hinges). Steps ar
 tangent space ``dx = (dp (3), dtheta (3, root-local rotation vector), dq (n))`` so the quaternion
 stays unit: see :func:`apply_step`.
 
-Five functions are built (SX, so they can be mapped and code-generated). Points enter to first
+Six functions are built (SX, so they can be mapped and code-generated). Points enter to first
 order in the step (:class:`~motion2robot.robot.kinematics.TangentFrames`): exact value and
 Jacobian at ``dx = 0``, the Jacobian by joint axis x lever arm instead of differentiating the chain.
 
@@ -21,6 +21,8 @@ Jacobian at ``dx = 0``, the Jacobian by joint axis x lever arm instead of differ
   linearised hard constraints (contact, floor, balance, self-collision rows;
   :data:`~motion2robot.retarget.costs.HARD_TERMS`), hinges at a bound of ``lm``'s box held;
   iterated by the solver as the final exact correction.
+- ``settle(qpos, p, lm) -> (dx, violation)``: the same without the self-collision rows (cheaper
+  by two thirds): the solver's second-order correction after every LM step.
 - ``violation(qpos, p) -> violation``: the squared hard-constraint residual alone.
 - ``points(qpos) -> (kp (3,K), corners (3,8), com (3,1), gaps (C,))``: tracked keypoints, sole
   corners [left 0..3, right 0..3], centre of mass, and self-collision gaps (m; negative =
@@ -161,7 +163,7 @@ def _ancestry(m, b: int) -> list[int]:
 
 def residuals(spec: ProblemSpec, q, dx, p, w):
     """Weighted residual vector ``r`` (cost = ||r||^2), per-term costs (list) and the unweighted
-    hard-constraint rows at ``q`` moved by ``dx``, for frame parameters ``p`` and term weights
+    hard-constraint rows (by term of :data:`~motion2robot.retarget.costs.HARD_TERMS`) at ``q`` moved by ``dx``, for frame parameters ``p`` and term weights
     ``w`` (casadi SX)."""
     rb = spec.robot
     L, lay = spec.length, spec.layout
@@ -198,7 +200,7 @@ def residuals(spec: ProblemSpec, q, dx, p, w):
     res["balance"].append(ca.sqrt(P["bal_w"]) * ca.fmax(0, worst) / L)  # most violated edge
     for g in gaps:
         res["self_collision"].append(ca.fmin(g, 0) / L)
-    hard = ca.vertcat(*[ca.vertcat(*res[t]) for t in HARD_TERMS if res[t]])
+    hard = {t: ca.vertcat(*res[t]) if res[t] else ca.SX.zeros(0, 1) for t in HARD_TERMS}
     r_all, terms = [], []
     for t in FRAME_TERMS:
         r = ca.vertcat(*res[t]) if res[t] else ca.SX.zeros(0, 1)
@@ -252,7 +254,7 @@ FUNCTION_OPTIONS = {"cse": True}
 
 
 def build_functions(spec: ProblemSpec) -> dict[str, ca.Function]:
-    """The ``step``, ``cost``, ``project``, ``violation`` and ``points`` casadi functions of
+    """The ``step``, ``cost``, ``project``, ``settle``, ``violation`` and ``points`` casadi functions of
     ``spec`` (module docstring), by name."""
     nq, nv = spec.robot.nq, spec.nv
     q = ca.SX.sym("qpos", nq)
@@ -280,26 +282,39 @@ def build_functions(spec: ProblemSpec) -> dict[str, ca.Function]:
     step = ca.Function("m2r_step", [q, p, w, lm], [step_dx, ca.sumsqr(r0), terms0],
                        ["qpos", "p", "w", "lm"], ["dx", "cost", "terms"], opts)
     cost = ca.Function("m2r_cost", [q, p, w], [ca.sumsqr(r0), terms0], ["qpos", "p", "w"], ["cost", "terms"], opts)
-    # exact correction: the smallest step (root position scaled by the leg length) that zeroes
-    # the linearised hard-constraint residuals; hinges at a bound of this frame do not move
-    # = -M Jc' (Jc M Jc')^-1 c as mu -> 0 (M: root position scaled by L^2), but solved as an
-    # nv x nv arrow-shaped system instead of a dense one over all constraint rows
-    Jc, c0 = ca.substitute([ca.jacobian(hard, dx), hard], [dx], [zero])
-    bl, bh = lm[1 + 2 * nv:1 + 2 * nv + n], lm[1 + 2 * nv + n:]
-    movable = ca.vertcat(ca.SX.ones(6), 1 - ca.logic_or(hq <= bl + eps, hq >= bh - eps))
-    Minv = ca.DM([1.0 / spec.length ** 2] * 3 + [1.0] * (nv - 3))
-    Ac = ca.mtimes(Jc.T, Jc) + ca.diag((PROJECTION_MU + lm[0]) * Minv)  # lm[0]: extra damping
-    Ac = ca.diag(movable) @ Ac @ ca.diag(movable) + ca.diag(1 - movable)
-    proj_dx = -_chol_solve(Ac, movable * ca.mtimes(Jc.T, c0), list(range(6, nv)) + list(range(6)))
-    project = ca.Function("m2r_project", [q, p, lm], [proj_dx, ca.sumsqr(c0)], ["qpos", "p", "lm"], ["dx", "violation"], opts)
-    violation = ca.Function("m2r_violation", [q, p], [ca.sumsqr(c0)], ["qpos", "p"], ["violation"], opts)
+    rows = {t: ca.substitute(x, dx, zero) for t, x in hard.items()}
+    jac = {t: ca.substitute(ca.jacobian(x, dx), dx, zero) for t, x in hard.items()}
+    c_all = ca.vertcat(*rows.values())
+    project = _projection("m2r_project", spec, q, p, lm, [jac[t] for t in HARD_TERMS], c_all)
+    light = [t for t in HARD_TERMS if t != "self_collision"]
+    settle = _projection("m2r_settle", spec, q, p, lm, [jac[t] for t in light], ca.vertcat(*[rows[t] for t in light]))
+    violation = ca.Function("m2r_violation", [q, p], [ca.sumsqr(c_all)], ["qpos", "p"], ["violation"], opts)
     _, kp, corners, com, gaps = _geometry(spec, q, dx)
     kp0 = ca.substitute(ca.horzcat(*kp), dx, zero)
     c0 = ca.substitute(ca.horzcat(*corners), dx, zero)
     com0 = ca.substitute(com, dx, zero)
     g0 = ca.substitute(ca.vertcat(*gaps), dx, zero) if gaps else ca.SX.zeros(0, 1)
     points = ca.Function("m2r_points", [q], [kp0, c0, com0, g0], ["qpos"], ["kp", "corners", "com", "gaps"], opts)
-    return {"step": step, "cost": cost, "project": project, "violation": violation, "points": points}
+    return {"step": step, "cost": cost, "project": project, "settle": settle, "violation": violation, "points": points}
+
+
+def _projection(name: str, spec: ProblemSpec, q, p, lm, jacobians: list, c0) -> ca.Function:
+    """``name(qpos, p, lm) -> (dx, violation)``: the smallest step (root position scaled by the leg
+    length) that zeroes the linearised rows ``c0`` (Jacobians ``jacobians`` with respect to the
+    tangent step, one block per term); hinges at a bound of ``lm``'s box do not move; ``lm[0]`` is
+    extra damping. = -M Jc' (Jc M Jc')^-1 c as the damping -> 0 (M: root position scaled by L^2),
+    but solved as an nv x nv arrow-shaped system instead of a dense one over all rows."""
+    nv, n = spec.nv, spec.n
+    Jc = ca.vertcat(*jacobians)
+    hq = q[7:]
+    eps = 1e-9
+    bl, bh = lm[1 + 2 * nv:1 + 2 * nv + n], lm[1 + 2 * nv + n:]
+    movable = ca.vertcat(ca.SX.ones(6), 1 - ca.logic_or(hq <= bl + eps, hq >= bh - eps))
+    Minv = ca.DM([1.0 / spec.length ** 2] * 3 + [1.0] * (nv - 3))
+    Ac = ca.mtimes(Jc.T, Jc) + ca.diag((PROJECTION_MU + lm[0]) * Minv)
+    Ac = ca.diag(movable) @ Ac @ ca.diag(movable) + ca.diag(1 - movable)
+    dx = -_chol_solve(Ac, movable * ca.mtimes(Jc.T, c0), list(range(6, nv)) + list(range(6)))
+    return ca.Function(name, [q, p, lm], [dx, ca.sumsqr(c0)], ["qpos", "p", "lm"], ["dx", "violation"], FUNCTION_OPTIONS)
 
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
