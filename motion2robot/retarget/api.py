@@ -1,9 +1,9 @@
 """``retarget(human, robot, options) -> RobotMotion``: the whole pipeline in memory.
 
 1. scale the human keypoints to the robot (:mod:`~motion2robot.retarget.scale`);
-2. solve every frame (batched LM, :mod:`~motion2robot.retarget.solver`) with the soles only asked
-   to touch the floor in contact frames; correct exactly onto the floor/self-collision
-   constraints; clamp joint velocities;
+2. solve every frame (batched LM, :mod:`~motion2robot.retarget.solver`; every step followed by a
+   Newton projection onto the contact/floor/balance rows) with the soles only asked to touch the
+   floor in contact frames; clamp joint velocities;
 3. pin each contact phase's sole where step 2 put it when the phase began
    (:mod:`~motion2robot.retarget.contacts`), moving a phase that begins while the other foot is
    pinned out of that foot's capsule (:mod:`~motion2robot.retarget.anchor_gap`) and, with balance
@@ -54,8 +54,6 @@ from motion2robot.robot_motion import RobotMotion
 
 #: Factor on the floor weight in the first (free-feet) stage.
 STAGE1_SOFTENING = 1e-3
-#: Newton projections of the free-feet answer before the contact phases are anchored.
-ANCHOR_CORRECTIONS = 2
 #: m of clearance kept between the feet's capsules (besides the collision MARGIN) when anchoring.
 ANCHOR_CLEARANCE = 0.002
 #: Extra correction rounds at most, run while some self-collision capsule pair still overlaps by
@@ -94,7 +92,7 @@ class RetargetOptions:
     scale: Scale | None = None
     contacts: bool = True
     weights: Weights = field(default_factory=Weights)
-    iterations: tuple[int, int] = (4, 3)
+    iterations: tuple[int, int] = (3, 3)
     corrections: int = 2
     margin: float | None = None
     backend: str = "auto"
@@ -176,7 +174,6 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
     w1 = replace(w, floor=w.floor * STAGE1_SOFTENING)
     Q, st1 = solve(problem, P1, q0, w1, opt.iterations[0], lo, hi)
     max_step = robot.velocity_limit / human.fps
-    Q, _ = correct(problem, P1, Q, lo, hi, None, ANCHOR_CORRECTIONS)  # soles apart (and on the floor) before anchoring
     Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)  # feasible start for stage 2
     _, corners, _, _ = _points(problem, Q)
     soles = anchor_soles(corners, labels) if opt.contacts else None

@@ -12,7 +12,8 @@ mode of a coordinate the tracking terms barely pin (iteration eigenvalue
 1 - (4 w_v + 16 w_a) / (2 w_v + 6 w_a), -1.6 with the default weights), which made the output
 zigzag frame to frame. A frame
 whose objective went up is sent back and its damping raised (per-frame LM). Hinges are projected
-onto their limits after every step.
+onto their limits after every step, and every frame back onto its contact/floor/balance
+constraints (a second-order correction, see ``solve``).
 """
 
 from __future__ import annotations
@@ -34,6 +35,14 @@ EXTRA_TOLERANCE = 1e-6
 #: Damping (added to the projection's 1e-8; the Jacobian rows are m / leg length per rad) of the
 #: retry after a correction step that made its frame's violation worse; x10 per further failure.
 RETRY_DAMPING = 1e-4
+#: Levenberg-Marquardt damping (relative to the normal matrix's diagonal) of every frame's first step.
+INITIAL_DAMPING = 1e-3
+#: Newton projection steps onto the hard constraints after every LM step, before it is judged
+#: (a second-order correction; see ``solve``).
+SECOND_ORDER = 1
+#: Largest step coordinate (rad, or m / leg length) below which a frame skips that correction
+#: (its drift off the constraints, ~ lever x step^2, is below 0.04 mm).
+SECOND_ORDER_STEP = 0.02
 #: rad the projection's bounds are widened by when hinges at a bound may move (see ``correct``).
 FREE_SLACK = 1e-6
 
@@ -79,7 +88,7 @@ def _temporal(Q: np.ndarray, sv: np.ndarray, w: Weights) -> tuple[np.ndarray, np
 
 def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights: Weights,
           iterations: int, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None = None,
-          tol: float = 1e-12) -> tuple[np.ndarray, SolveStats]:
+          tol: float = 1e-12, second_order: int | None = None) -> tuple[np.ndarray, SolveStats]:
     """Minimise every frame's objective from ``q0`` (T, nq) with frame parameters ``params``
     (T, n_params); returns the (T, nq) solution and its figures. Hinges stay within [lower, upper].
 
@@ -88,7 +97,17 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
     (start from a trajectory that satisfies it; finish with an exact clamping pass).
 
     Per-frame LM: a frame whose objective (its own terms + the temporal terms with its neighbours)
-    went up is put back and retried with ten times the damping."""
+    went up is put back and retried with ten times the damping (its new step is computed in the
+    next round, which costs the frame a round but keeps one step evaluation per round).
+
+    second_order: Newton projections onto the contact, floor and balance rows (``settle``) after
+    every step, before the step is judged (default :data:`SECOND_ORDER`; frames whose step is
+    below :data:`SECOND_ORDER_STEP` skip it). The hard terms are stiff penalties (weights 1e5):
+    a step along the curved constraint surface leaves it to second order (0.3 mm for 0.06 rad on
+    a 10 cm lever), the penalty charges that more than the step gained, the step is refused and
+    the damping climbs, so plain LM crawls along the constraints (the Maratos effect). With the
+    correction the same steps are taken: on the bench's 40-frame probe 10 iterations come within
+    1.4 % of IPOPT's objective (were 52 % above), 50 within 0.6 %."""
     t0 = time.perf_counter()
     spec = problem.spec
     T, nv = q0.shape[0], spec.nv
@@ -99,11 +118,13 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
     wvec = np.array(weights.frame_vector())
     Q = q0.copy()
     Q[:, 7:] = np.clip(Q[:, 7:], lower, upper)
-    lam = np.full(T, 1e-3)
+    lam = np.full(T, INITIAL_DAMPING)
+    second_order = SECOND_ORDER if second_order is None else second_order
     n = nv - 6
     lm = np.zeros((T, 1 + 2 * nv + 2 * n))
     f_prev = np.full(T, np.inf)
     Q_prev = Q.copy()
+    retried = np.zeros(T, dtype=bool)  # frames put back in the round before
     it = 0
     for it in range(1, iterations + 1):
         gt, dt, ct = _temporal(Q, sv, weights)
@@ -115,17 +136,29 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
         lm[:, 1 + 2 * nv + n:] = hi
         dx, cost, _ = step(Q, params, wvec, lm)
         f = cost[:, 0] + ct
-        bad = f > f_prev * (1 + 1e-12)
+        # a frame put back in the round before sits where it was judged: its objective moved only
+        # with its neighbours, so it is not judged again (else it could be put back for ever)
+        bad = (f > f_prev * (1 + 1e-12)) & ~retried
         if bad.any():  # put those frames back; their step is recomputed next round with more damping
             Q[bad] = Q_prev[bad]
             f[bad] = f_prev[bad]
             dx[bad] = 0.0
-        lam = np.where(bad, lam * 10.0, np.maximum(lam * 0.3, 1e-7))
-        if not bad.any() and np.max(f_prev - f) < tol:
+        # a frame put back in the round before has not moved since: its zero gain is no success
+        # (its damping stays) and says nothing about convergence
+        lam = np.where(bad, lam * 10.0, np.where(retried, lam, np.maximum(lam * 0.3, 1e-7)))
+        if not bad.any() and not retried.any() and np.max(f_prev - f) < tol:
             break
+        retried = bad
         f_prev, Q_prev = f, Q.copy()
         Q = apply_step(Q, dx)
         Q[:, 7:] = np.clip(Q[:, 7:], lo, hi)
+        rows = np.flatnonzero(np.abs(dx).max(axis=1) > SECOND_ORDER_STEP) if second_order else ()
+        for _ in range(second_order if len(rows) else 0):  # back onto the hard constraints before the step is judged
+            lmc = np.zeros((len(rows), lm.shape[1]))  # the projection's settings: no extra damping, the hinge box
+            lmc[:, 1 + 2 * nv:1 + 2 * nv + n] = lo[rows]
+            lmc[:, 1 + 2 * nv + n:] = hi[rows]
+            Q[rows] = apply_step(Q[rows], problem.settle_eval(len(rows))(Q[rows], params[rows], lmc)[0])
+            Q[rows, 7:] = np.clip(Q[rows, 7:], lo[rows], hi[rows])
     cost, terms = problem.cost_eval(T)(Q, params, wvec)
     bad = cost[:, 0] + _temporal(Q, sv, weights)[2] > f_prev * (1 + 1e-12)
     if bad.any():  # the last step made these frames worse: keep their previous iterate
