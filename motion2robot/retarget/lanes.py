@@ -145,9 +145,6 @@ def _literal(x: float) -> str:
     return repr(float(x))
 
 
-_DP = ctypes.POINTER(ctypes.c_double)
-
-
 def signature(f: ca.Function) -> tuple[str, list[int], list[int]]:
     """(name, nonzeros of each input, of each output) of ``f``: all :class:`LaneEval` needs."""
     return f.name(), [f.nnz_in(i) for i in range(f.n_in())], [f.nnz_out(i) for i in range(f.n_out())]
@@ -164,7 +161,7 @@ class LaneEval:
         :func:`signature` gives it."""
         name, self.nnz_in, self.nnz_out = signature(f) if isinstance(f, ca.Function) else f
         self._fn = getattr(lib, name)
-        self._fn.argtypes = [ctypes.c_int, ctypes.POINTER(_DP), ctypes.POINTER(_DP)]
+        self._fn.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]  # double **, as addresses
         self._fn.restype = None
         self.name = name
         self.shared = shared
@@ -179,6 +176,7 @@ class LaneEval:
             args.append(np.ascontiguousarray(np.reshape(x, shape), dtype=np.float64))
         outs = [np.empty((frames, n)) for n in self.nnz_out]
         if frames:
-            self._fn(frames, (_DP * len(args))(*[a.ctypes.data_as(_DP) for a in args]),
-                     (_DP * len(outs))(*[o.ctypes.data_as(_DP) for o in outs]))
+            arg_ptrs = np.array([a.ctypes.data for a in args], dtype=np.uintp)
+            out_ptrs = np.array([o.ctypes.data for o in outs], dtype=np.uintp)
+            self._fn(frames, arg_ptrs.ctypes.data, out_ptrs.ctypes.data)
         return outs

@@ -8,7 +8,7 @@ cannot measure falls back to ``legs``; the robot TOML's ``[scale]`` overrides an
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -39,9 +39,7 @@ class Scale:
     source: tuple[tuple[str, str], ...] = ()
 
     def as_dict(self) -> dict:
-        d = asdict(self)
-        d["source"] = dict(self.source)
-        return d
+        return {"legs": self.legs, "arms": self.arms, "height": self.height, "source": dict(self.source)}
 
 
 def _chain_length(points: dict[str, np.ndarray], chain: tuple[str, ...]) -> float:
