@@ -119,3 +119,23 @@ def test_robot_without_feet_is_an_error(tmp_path):
 def test_keypoint_on_a_missing_body_is_an_error(tmp_path):
     with pytest.raises(RobotConfigError, match="no_such_link"):
         load_robot(str(_toml(tmp_path, feet=True, body="no_such_link")))
+
+
+def test_cli_iterations_buys_accuracy(tmp_path):
+    demo = ROOT / "motion2robot" / "data" / "demo_wave_squat.npy"
+    error = {}
+    for its in ("3,3", "6"):
+        out = tmp_path / f"demo_{its}.npz"
+        assert main(["retarget", str(demo), "--iterations", its, "-o", str(out)]) == 0
+        with np.load(out, allow_pickle=False) as z:
+            solver_meta = json.loads(str(z["meta"]))["solver"]
+        assert max(solver_meta["iterations"]) <= int(its[-1])
+        error[its] = np.mean(solver_meta["residual_per_frame"])
+    assert error["6"] < error["3,3"]
+
+
+@pytest.mark.parametrize("bad", ["0", "3,x", "1,2,3"])
+def test_cli_bad_iterations_is_a_usage_error(bad, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["retarget", "x.npy", "--iterations", bad])
+    assert exc.value.code == 2 and "--iterations" in capsys.readouterr().err
