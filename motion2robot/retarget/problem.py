@@ -163,8 +163,8 @@ def _ancestry(m, b: int) -> list[int]:
 
 def residuals(spec: ProblemSpec, q, dx, p, w):
     """Weighted residual vector ``r`` (cost = ||r||^2), per-term costs (list) and the unweighted
-    hard-constraint rows (by term of :data:`~motion2robot.retarget.costs.HARD_TERMS`) at ``q`` moved by ``dx``, for frame parameters ``p`` and term weights
-    ``w`` (casadi SX)."""
+    hard-constraint rows (dict by term of :data:`~motion2robot.retarget.costs.HARD_TERMS`) at ``q``
+    moved by ``dx``, for frame parameters ``p`` and term weights ``w`` (casadi SX)."""
     rb = spec.robot
     L, lay = spec.length, spec.layout
     W = dict(zip(FRAME_TERMS, [w[i] for i in range(len(FRAME_TERMS))]))
