@@ -38,6 +38,7 @@ from motion2robot.retarget import lanes
 from motion2robot.retarget.problem import ProblemSpec, build_functions, build_spec
 from motion2robot.retarget.recipe import recipe_digest
 from motion2robot.robot.robot import Robot
+from motion2robot.util.cache import cache_dir, write_atomic
 
 CFLAGS = ("-O1", "-fPIC", "-shared")  # casadi's code: -O2 runs ~10 % faster but compiles ~2x longer
 #: Lane code: -O1; no FMA contraction, so the numbers are casadi's.
@@ -47,11 +48,6 @@ SHARED_INPUTS = {"step": (2,), "cost": (2,)}
 BACKENDS = ("auto", "lanes", "c", "vm")
 #: The functions of :func:`~motion2robot.retarget.problem.build_functions`.
 FUNCTIONS = ("step", "cost", "project", "settle", "violation", "points")
-
-
-def cache_dir() -> Path:
-    root = os.environ.get("MOTION2ROBOT_CACHE")
-    return Path(root) if root else Path.home() / ".cache" / "motion2robot"
 
 
 def _compiler() -> str | None:
@@ -227,12 +223,7 @@ def _recipe_lookup(recipe: Path) -> tuple[Path, dict] | None:
 
 def _recipe_record(recipe: Path, lib: Path, functions: dict[str, ca.Function]) -> None:
     info = {"library": lib.name, "signatures": {name: lanes.signature(f) for name, f in functions.items()}}
-    part = recipe.with_name(recipe.name + f".{os.getpid()}.tmp")
-    try:
-        part.write_text(json.dumps(info))
-        part.replace(recipe)  # atomic, like the library
-    except OSError:
-        pass  # a read-only cache: the next process builds the graph again
+    write_atomic(recipe, json.dumps(info))  # a read-only cache: the next process builds the graph again
 
 
 @functools.lru_cache(maxsize=8)
