@@ -13,7 +13,8 @@ inscribed capsule is used. Pairs of a body and its parent, and pairs already tou
 (overlaps of the model's hulls by design); pairs the nominal posture holds closer than
 :data:`NOMINAL_CLEARANCE` get that much clearance at the nominal posture (their capsules overstate
 the hulls). Capsule distance = segment distance - radii (exact);
-:data:`MARGIN` covers box corners outside their capsule.
+:data:`MARGIN` covers box corners outside their capsule. Pairs of bodies one or two hinges apart
+that this model leaves out are kept apart in joint space (:mod:`~motion2robot.retarget.joint_cuts`).
 """
 
 from __future__ import annotations

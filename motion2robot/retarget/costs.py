@@ -24,7 +24,8 @@ FRAME_TERMS: tuple[str, ...] = (
     "contact_xy",      # sole centre at its anchored xy in contact frames (no sliding; pivoting allowed)
     "floor",           # no sole corner below z = 0 (hinge), every frame
     "balance",         # CoM ground projection inside the shrunk support polygon (hinge)
-    "self_collision",  # limb capsules vs torso / other leg: distance >= sum of radii (hinge)
+    "self_collision",  # limb capsules vs torso / other leg: distance >= sum of radii (hinge);
+                       # bodies <= 2 hinges apart: joint-space cuts (joint_cuts.py), linear
 )
 
 #: The terms that are hard constraints (residual zero when satisfied), corrected exactly at the end.

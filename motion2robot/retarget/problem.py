@@ -26,7 +26,8 @@ Jacobian at ``dx = 0``, the Jacobian by joint axis x lever arm instead of differ
 - ``violation(qpos, p) -> violation``: the squared hard-constraint residual alone.
 - ``points(qpos) -> (kp (3,K), corners (3,8), com (3,1), gaps (C,))``: tracked keypoints, sole
   corners [left 0..3, right 0..3], centre of mass, and self-collision gaps (m; negative =
-  penetration; one per capsule pair, one per covering sphere of a capsule-polytope pair).
+  penetration; one per capsule pair, one per covering sphere of a capsule-polytope pair, then
+  one per joint-space cut of :mod:`~motion2robot.retarget.joint_cuts`).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from motion2robot.errors import RobotConfigError
 from motion2robot.retarget import native
 from motion2robot.retarget.collision import CapsulePair, collision_pairs, pair_gap
 from motion2robot.retarget.costs import FRAME_TERMS, HARD_TERMS
+from motion2robot.retarget.joint_cuts import JointCut, joint_cuts
 from motion2robot.robot.kinematics import TangentFrames, point_in_body
 from motion2robot.robot.robot import Robot
 
@@ -70,6 +72,7 @@ class ProblemSpec:
     foot_fwd_local: np.ndarray         # (2, 3) foot axes pointing forward at the nominal pose
     foot_up_local: np.ndarray          # (2, 3) foot axes pointing up at the nominal pose
     capsules: tuple[CapsulePair, ...]
+    cuts: tuple[JointCut, ...]           # pairs one or two hinges apart, in joint space
     layout: dict[str, slice] = field(default_factory=dict)
 
     @property
@@ -92,12 +95,13 @@ def build_spec(robot: Robot) -> ProblemSpec:
     ez, ey, ex = np.eye(3)[2], np.eye(3)[1], np.eye(3)[0]
     feet = robot.foot_bodies
     caps = collision_pairs(robot)
+    cuts = joint_cuts(robot, {tuple(sorted((c.a.body, c.b.body))) for c in caps})
     layout = _layout(len(names), len(pairs))
     return ProblemSpec(
         robot=robot, n=robot.n_joints, nv=6 + robot.n_joints, length=length, kp_names=names,
         dir_pairs=pairs, left_local=rot(robot.root_body).T @ ey, torso_up_local=rot(robot.torso_body).T @ ez,
         foot_fwd_local=np.stack([rot(b).T @ ex for b in feet]), foot_up_local=np.stack([rot(b).T @ ez for b in feet]),
-        capsules=caps, layout=layout,
+        capsules=caps, cuts=cuts, layout=layout,
     )
 
 
@@ -150,6 +154,9 @@ def _geometry(spec: ProblemSpec, qpos, dx):
         return origin, [tf.point(b, e) - origin for e in np.eye(3)]
 
     gaps = [pair_gap(c, ends, ends_now, frame) for c in spec.capsules]
+    for cut in spec.cuts:  # linear in the hinges (joint_cuts)
+        angles = ca.vertcat(*[qpos[int(i)] + dx[int(j)] for i, j in zip(cut.qpos_index, cut.dof_index)])
+        gaps.append(cut.lever * (cut.offset - ca.dot(ca.DM(cut.normal), angles)))
     return tf, kp, corners, com, gaps
 
 
