@@ -41,7 +41,7 @@ GRID = 61
 COARSE = 9
 #: Postures whose geoms are closer than this (m) count as colliding (for pairs that meet at all).
 CUT_CLEARANCE = 0.002
-#: Directions tried for a half-plane (over the half-circle's both sides).
+#: Directions tried for a half-plane (evenly over the circle).
 DIRECTIONS = 360
 #: Distances beyond this (m) are not computed exactly (``mj_geomDistance``'s ``distmax``).
 DISTMAX = 0.05
@@ -67,7 +67,7 @@ class JointCut:
 
 def _path_joints(m: mujoco.MjModel, a: int, b: int) -> list[int] | None:
     """The joints of the bodies on the tree path between ``a`` and ``b`` (below their common
-    ancestor); None if one of them is not a hinge or slide."""
+    ancestor); None if one of them is not a hinge."""
     def up(x):
         out = []
         while x > 0:
@@ -76,10 +76,9 @@ def _path_joints(m: mujoco.MjModel, a: int, b: int) -> list[int] | None:
         return out
     ua, ub = up(a), up(b)
     common = next((x for x in ua if x in ub), 0)
-    bodies = [x for x in ua + ub if x not in up(common) and x != common]
+    bodies = [x for x in ua + ub if x not in up(common)]
     joints = [j for j in range(m.njnt) if int(m.jnt_bodyid[j]) in bodies]
-    ok = all(int(m.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)) for j in joints)
-    return joints if ok else None
+    return joints if all(int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE) for j in joints) else None
 
 
 def _excluded(m: mujoco.MjModel) -> set[tuple[int, int]]:
@@ -132,7 +131,9 @@ def greedy_cuts(u: np.ndarray, bad: np.ndarray, u_nom: np.ndarray, pad: float) -
     """Half-planes ``n . u <= c`` (grid coordinates ``u`` (P, k)) that together leave out every
     ``bad`` point by ``pad`` and keep ``u_nom``: the colliding point nearest the nominal posture
     not yet left out gets the half-plane through it (less ``pad``) that loses the fewest free
-    points still kept, until none is left. None if a colliding point cannot be left out."""
+    points still kept (of those, the one leaving out the most colliding points), until none is
+    left; then half-planes the others make redundant are dropped. None if a colliding point
+    cannot be left out."""
     dirs = _directions(u.shape[1])
     proj = u @ dirs.T                        # (P, directions)
     nom = u_nom @ dirs.T
@@ -143,13 +144,18 @@ def greedy_cuts(u: np.ndarray, bad: np.ndarray, u_nom: np.ndarray, pad: float) -
     while todo.size:
         c = proj[todo[0]] - pad              # the half-plane through the nearest, per direction
         lost = np.count_nonzero(kept[:, None] & (proj > c), axis=0)
-        lost = np.where(nom < c, lost, np.iinfo(lost.dtype).max)
-        i = int(np.argmin(lost))
+        gained = np.count_nonzero(proj[todo] > c, axis=0)
+        score = np.where(nom < c, lost * (bad.size + 1) - gained, np.iinfo(np.int64).max)
+        i = int(np.argmin(score))
         if nom[i] >= c[i]:
             return None
         out.append((dirs[i], float(c[i])))
         kept &= proj[:, i] <= c[i]
         todo = todo[proj[todo, i] <= c[i]]
+    for cut in list(reversed(out)):          # the last ones were made for stragglers
+        rest = [x for x in out if x is not cut]
+        if not np.any(bad & np.all([u @ n <= c for n, c in rest], axis=0) if rest else bad):
+            out = rest
     return out
 
 
@@ -234,7 +240,7 @@ def _map_pairs(robot: Robot, pairs: list[tuple[int, int, list[int]]]) -> tuple[J
     hinge_of = {int(j): i for i, j in enumerate(robot.joint_ids)}
     out = []
     for a, b, joints in pairs:
-        if any(j not in hinge_of or int(m.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_HINGE) for j in joints):
+        if any(j not in hinge_of for j in joints):
             continue
         lo = np.array([robot.lower[hinge_of[j]] for j in joints])
         hi = np.array([robot.upper[hinge_of[j]] for j in joints])
