@@ -33,3 +33,14 @@ requires_shared = pytest.mark.skipif(SHARED is None, reason="../shared (real mot
 requires_menagerie = pytest.mark.skipif(
     MENAGERIE is None or not MENAGERIE.is_dir(), reason="no menagerie root (set MENAGERIE_ROOT)"
 )
+
+
+def load_menagerie(name: str):
+    """``load_robot(name)`` for a ``menagerie:`` robot with MENAGERIE_ROOT pointing at the shared
+    menagerie for the load only."""
+    from unittest import mock
+
+    from motion2robot.robot import load_robot
+
+    with mock.patch.dict(os.environ, {"MENAGERIE_ROOT": str(MENAGERIE)}):
+        return load_robot(name)

@@ -9,25 +9,14 @@ import pytest
 
 from motion2robot.retarget.anchor_gap import segment_distance
 from motion2robot.retarget.collision import _mesh_vertices, body_capsules, collision_pairs
-from motion2robot.robot import load_robot
-from tests._shared import MENAGERIE, MOTIONS, requires_menagerie, requires_shared
+from tests._shared import MOTIONS, load_menagerie, requires_menagerie, requires_shared
 
 pytestmark = requires_menagerie
 
 
 @pytest.fixture(scope="module")
 def g1():
-    import os
-
-    old = os.environ.get("MENAGERIE_ROOT")
-    os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
-    try:
-        yield load_robot("menagerie:unitree_g1")
-    finally:
-        if old is None:
-            os.environ.pop("MENAGERIE_ROOT")
-        else:
-            os.environ["MENAGERIE_ROOT"] = old
+    return load_menagerie("menagerie:unitree_g1")
 
 
 

@@ -12,7 +12,7 @@ from motion2robot.retarget import joint_cuts as jc
 from motion2robot.retarget.collision import collision_pairs
 from motion2robot.robot import load_robot
 from motion2robot.validate.models import check_model
-from tests._shared import MENAGERIE, MOTIONS, requires_menagerie, requires_shared
+from tests._shared import MOTIONS, load_menagerie, requires_menagerie, requires_shared
 
 
 def _grid(n: int) -> np.ndarray:
@@ -56,17 +56,7 @@ def test_op3_needs_no_cuts():
 
 @pytest.fixture(scope="module")
 def g1():
-    import os
-
-    old = os.environ.get("MENAGERIE_ROOT")
-    os.environ["MENAGERIE_ROOT"] = str(MENAGERIE)
-    try:
-        yield load_robot("menagerie:unitree_g1")
-    finally:
-        if old is None:
-            os.environ.pop("MENAGERIE_ROOT")
-        else:
-            os.environ["MENAGERIE_ROOT"] = old
+    return load_menagerie("menagerie:unitree_g1")
 
 
 def _modelled(robot) -> set[tuple[int, int]]:
