@@ -154,7 +154,8 @@ def greedy_cuts(u: np.ndarray, bad: np.ndarray, u_nom: np.ndarray, pad: float) -
         todo = todo[proj[todo, i] <= c[i]]
     for cut in list(reversed(out)):          # the last ones were made for stragglers
         rest = [x for x in out if x is not cut]
-        if not np.any(bad & np.all([u @ n <= c for n, c in rest], axis=0) if rest else bad):
+        kept_by_rest = np.all([u @ n <= c for n, c in rest], axis=0) if rest else np.ones(len(u), dtype=bool)
+        if not np.any(bad & kept_by_rest):
             out = rest
     return out
 
