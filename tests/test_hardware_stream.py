@@ -71,17 +71,20 @@ def start_at(q0: np.ndarray) -> dict[int, int]:
 
 
 def check_wire(chain: VirtualChain) -> int:
-    """Every goal seen on the wire is within limits and within the maximum step; returns the count."""
-    step = np.floor(LIMITS.velocity * CAL.ticks_per_rad / RATE)
-    last: dict[int, int] = {}
+    """Every goal seen on the wire is within limits, and over any n goal packets a servo's goal moved
+    at most velocity * n ticks + one tick of quantisation; returns the count."""
+    speed = LIMITS.velocity * CAL.ticks_per_rad / RATE  # ticks per control tick
+    seq: dict[int, list[int]] = {}
     log = chain.wire_log()
     for _, sid, ticks in log:
         k = sid - 1
         q = CAL.to_radians(np.array([ticks if j == k else CAL.center + CAL.offset[j] for j in range(N)]))[k]
         assert LIMITS.lower[k] - 1e-12 <= q <= LIMITS.upper[k] + 1e-12, (sid, ticks, q)
-        if sid in last:
-            assert abs(ticks - last[sid]) <= step[k], (sid, last[sid], ticks)
-        last[sid] = ticks
+        seq.setdefault(sid, []).append(ticks)
+    for sid, goals in seq.items():
+        g = np.array(goals, dtype=np.float64)
+        for lag in range(1, min(len(g), 200)):
+            assert np.abs(g[lag:] - g[:-lag]).max() <= speed[sid - 1] * lag + 1.0, (sid, lag)
     return len(log)
 
 
