@@ -56,6 +56,9 @@ def run(args: argparse.Namespace) -> int:
         from motion2robot.batch.ray_backend import import_ray
 
         import_ray()
+    from motion2robot.util.output import output_path
+
+    output_path(args.out, "results file")
     robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
     read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,

@@ -26,6 +26,7 @@ from motion2robot.hardware.limits import JointLimits
 from motion2robot.hardware.policy import TorquePolicy
 from motion2robot.hardware.stream import joint_trajectory, stream_motion
 from motion2robot.robot_motion import RobotMotion
+from motion2robot.util.output import output_path
 
 EXIT = {"end": 0, "interrupt": 130, "fault": 2, "refused": 2, "error": 3}
 
@@ -89,7 +90,8 @@ def run(args: argparse.Namespace) -> int:
     joint_trajectory(motion, cal.joints)  # fail early on a motion for another robot
     hinge = {n: i for i, n in enumerate(robot.joint_names)}
     rest = None if args.rest == "last" else np.array([robot.nominal_qpos[7 + hinge[j]] for j in cal.joints])
-    telemetry = args.telemetry or str(Path(args.motion).with_suffix("")) + ".telemetry.jsonl"
+    telemetry = str(output_path(args.telemetry or str(Path(args.motion).with_suffix("")) + ".telemetry.jsonl",
+                                "telemetry"))
     limits = JointLimits.from_robot(robot)
     if args.dry_run:
         report = stream_motion(motion, limits, servo_map, None, rate_hz=args.rate, loop=args.loop, dry_run=True,

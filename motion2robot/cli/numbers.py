@@ -33,6 +33,7 @@ def number(unit: str, low: float, high: float, *, low_open: bool = False, whole:
 
 
 RATE_HZ = number("Hz", 0.0, 1000.0, low_open=True)
+FPS = number("frames per second", 0.1, 10000.0)
 SECONDS = number("s", 0.0, 1e7, low_open=True)
 RAD_PER_S = number("rad/s", 0.0, 100.0, low_open=True)
 RADIANS = number("rad", 0.0, 2 * math.pi, low_open=True)

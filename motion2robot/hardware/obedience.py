@@ -5,9 +5,11 @@ was sent. Each of these is a fault (a typed :class:`~motion2robot.hardware.error
 
 - **Bus silent longer than the Bus Watchdog** (host clock, checked before every tick's write):
   the servos have stopped themselves (a stalled process: SIGSTOP/SIGCONT, swap, a debugger).
-- **Bus Watchdog state** (register 98, read back every other ``state_every`` ticks, about 4
-  times a second, alternating with Hardware Error Status): 255 means it tripped; any other value than
-  the one armed means the servo is not guarded as configured.
+- **Bus Watchdog state** (register 98, read back alternately with Hardware Error Status every
+  ``state_every`` ticks, 0.25 s, so each every 0.5 s; in a tick with half a period to spare, or
+  at the latest ``state_every`` ticks late, so the extra read does not make ticks overrun): 255
+  means it tripped; any other value than the one armed means the servo is not guarded as
+  configured.
 - **Hardware Error Status** non-zero (also caught on every tick by the Alert bit).
 - **Present position diverging from the goal** by more than servo compliance and tracking lag
   explain, for ``persist_ticks`` ticks in a row (the servo is stalled, blocked or refusing
@@ -39,7 +41,7 @@ from motion2robot.hardware.limits import JointLimits
 
 #: Compliance assumed when the robot config gives no torque/kp (XM430-W350 at 12 V: 4.1 / 21.1).
 DEFAULT_COMPLIANCE_RAD = 0.2
-STATE_CHECK_S = 0.125  # each of the two state registers is read back every 0.25 s
+STATE_CHECK_S = 0.25  # one of the two state registers is read back every 0.25 s (each every 0.5 s)
 PERSIST_S = 0.05
 STATE_REGISTERS = ("bus_watchdog", "hardware_error_status")
 
@@ -81,6 +83,8 @@ class ObedienceMonitor:
         self.ids = list(ids)
         self.over = np.zeros(len(self.ids), dtype=np.int64)
         self.last_heard: float | None = None
+        self.next_state = limits.state_every  # tick count at which a state read is due
+        self.state_turn = 0
 
     def _who(self, k: int) -> str:
         return f"servo {self.ids[k]} ({self.cal.joints[k]})"
@@ -116,11 +120,15 @@ class ObedienceMonitor:
                 "tracking lag explain); the servo is blocked, overloaded or not obeying: check for a collision or "
                 "a load, and the servo with 'motion2robot servos scan'", self.ids[k])
 
-    def state_register(self, tick: int) -> str | None:
-        """The state register to read back at ``tick`` (None: none this tick)."""
-        if tick % self.limits.state_every:
+    def state_register(self, tick: int, spare_time: bool = True) -> str | None:
+        """The state register to read back at the ``tick``-th tick (None: none now). A due read
+        waits for a tick with ``spare_time``, at most ``state_every`` ticks."""
+        every = self.limits.state_every
+        if tick < self.next_state or (not spare_time and tick < self.next_state + every):
             return None
-        return STATE_REGISTERS[(tick // self.limits.state_every) % len(STATE_REGISTERS)]
+        self.next_state = tick + every
+        self.state_turn += 1
+        return STATE_REGISTERS[(self.state_turn - 1) % len(STATE_REGISTERS)]
 
     def check_state(self, register: str, values: Mapping[int, int]) -> None:
         """Values of a state register read back from every servo."""

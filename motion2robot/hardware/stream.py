@@ -185,7 +185,8 @@ class Streamer:
             self.bus.sync_write("goal_position", dict(zip(self.ids, goal.tolist())))
             present = self._present()
             self.monitor.heard(clock())
-            reg = self.monitor.state_register(len(self.starts))
+            spare = clock() < t0 + (self.k + 0.5) * self.dt  # half a period left: an extra read will not overrun
+            reg = self.monitor.state_register(len(self.starts), spare)
             if reg:
                 self._check_state((reg,))
             for msg in self.bus.recoveries():

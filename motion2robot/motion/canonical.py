@@ -17,9 +17,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from motion2robot.motion.checks import check_frames, fail
+from motion2robot.motion.checks import check_fps, check_frames, check_magnitude, fail, numeric_positions
 from motion2robot.motion.height import stature
-from motion2robot.motion.human import KP, HumanMotion
+from motion2robot.motion.human import KP, SMPL22, HumanMotion
 
 #: Foot keypoints used for the floor and contacts: ankles and toes.
 FOOT_KPS = (KP["left_ankle"], KP["right_ankle"], KP["left_foot"], KP["right_foot"])
@@ -134,8 +134,10 @@ def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str
     up / units: None to detect; ``*_source`` says where a given value came from ("format",
     "--up", ...) and is recorded in meta; source_fps: the file's own rate when ``fps`` overrides it.
     """
-    pos = np.asarray(positions, dtype=np.float64)
+    pos = numeric_positions(path, positions)
+    fps = check_fps(path, fps, "the frame rate")
     check_frames(path, pos)
+    check_magnitude(path, pos, SMPL22 if pos.ndim == 3 and pos.shape[1] == len(SMPL22) else None)
     if up is None:
         up, agree = detect_up(pos)
         up_source = f"detected: head above feet along {up} in {agree:.0%} of frames"
