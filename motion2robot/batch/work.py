@@ -18,6 +18,8 @@ with ``read_motion`` to count. A file that cannot be counted becomes one item wi
 
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -60,6 +62,23 @@ class Expansion:
     items: tuple[WorkItem, ...]
     skipped: tuple[tuple[str, str], ...] = ()
     count_errors: dict[str, str] = field(default_factory=dict)
+
+
+def special_file(path: Path) -> str | None:
+    """What ``path`` is when it is not a regular file or a missing one (a FIFO would block a
+    reader for ever), else None."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return "is a broken symbolic link" if os.path.islink(path) else None
+    except OSError as err:
+        return f"cannot be examined ({err.strerror})"
+    for test, what in ((stat.S_ISDIR, "is a directory"), (stat.S_ISFIFO, "is a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "is a character device"), (stat.S_ISBLK, "is a block device"),
+                       (stat.S_ISSOCK, "is a socket")):
+        if test(st.st_mode):
+            return what
+    return None
 
 
 def one_line(err: BaseException) -> str:
@@ -132,10 +151,12 @@ def _read_manifest(path: Path) -> list[Path]:
 def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> Iterable[tuple[Path, bool]]:
     """Yield (file, named_explicitly) in order."""
     for p in inputs:
-        if p.is_dir():
-            for f in sorted(q for q in p.rglob("*") if q.is_file()):
-                if f.suffix.lower() in MOTION_EXTENSIONS:
-                    yield f, False
+        if p.is_dir() and p.suffix.lower() not in MOTION_EXTENSIONS:
+            # regular files, and anything else named like a motion (FIFO, device, broken link,
+            # a directory x.npy): those become error rows instead of vanishing
+            for f in sorted(q for q in p.rglob("*") if q.suffix.lower() in MOTION_EXTENSIONS
+                            and (q.is_file() or special_file(q) is not None)):
+                yield f, False
         elif p.suffix.lower() in MANIFEST_EXTENSIONS:
             if not p.is_file():
                 raise UserError(f"{p}: manifest not found; check the path")
@@ -169,6 +190,9 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
             continue
         seen.add(path)
         try:
+            special = special_file(f)
+            if special is not None:
+                raise UserError(f"{f}: {special}, not a motion file; remove it or give a regular file")
             if not f.is_file():
                 raise UserError(f"{f}: no such file; fix the manifest entry")
             try:

@@ -72,6 +72,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     warnings.showwarning = _show_warning
+    for stream in (sys.stdout, sys.stderr):  # a file name that is not UTF-8 prints as \xe9, never a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     try:
         from motion2robot.viz.gl import import_mujoco
 
