@@ -18,6 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from motion2robot.errors import InputFileError
+from motion2robot.util.files import special_file
 from motion2robot.util.jsonable import plain
 
 NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
@@ -112,6 +113,9 @@ class RobotMotion:
             raise InputFileError(f"{path}: is a directory, not a robot motion .npz; give the file made by 'motion2robot retarget'")
         if not path.exists():
             raise InputFileError(f"{path}: no such file; check the path")
+        special = special_file(path)
+        if special is not None:  # a FIFO would block np.load for ever
+            raise InputFileError(f"{path}: {special}, not a robot motion .npz; give the file made by 'motion2robot retarget'")
         try:
             z = np.load(path, allow_pickle=False)
             if not isinstance(z, np.lib.npyio.NpzFile):

@@ -41,6 +41,19 @@ def dumps_row(row: dict[str, Any]) -> str:
     return text
 
 
+def _lock_or_refuse(fh: Any, results: Path) -> None:
+    """An exclusive, non-blocking flock on ``fh``; UserError (and ``fh`` closed) if another batch
+    holds it."""
+    if fcntl is None:
+        return
+    try:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        fh.close()
+        raise UserError(f"{results}: another batch is writing to this file; wait for it to end "
+                        "or give a different --out") from None
+
+
 class batch_lock:
     """Context manager: an exclusive lock on ``OUT.lock`` beside the results file, held for a whole
     batch (plan, ``--redo`` rewrite, run), so that a second batch on the same file fails at once
@@ -55,13 +68,7 @@ class batch_lock:
     def __enter__(self) -> "batch_lock":
         self.lock_path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = open(self.lock_path, "a")  # noqa: SIM115 (closed in __exit__)
-        if fcntl is not None:
-            try:
-                fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                self._fh.close()
-                raise UserError(f"{self.path}: another batch is writing to this file; wait for it to end "
-                                "or give a different --out") from None
+        _lock_or_refuse(self._fh, self.path)
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -164,13 +171,7 @@ class ResultWriter:
             raise InputFileError(f"{self.path}: is a folder; give --out a .jsonl file path")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = open(self.path, "a", encoding="utf-8")
-        if fcntl is not None:
-            try:
-                fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                self._fh.close()
-                raise UserError(f"{self.path}: another batch is writing to this file; wait for it to end "
-                                "or give a different --out") from None
+        _lock_or_refuse(self._fh, self.path)
         self.torn_bytes = _cut_torn_tail(self.path)
 
     def write(self, row: dict[str, Any]) -> None:

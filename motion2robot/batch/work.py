@@ -18,8 +18,6 @@ with ``read_motion`` to count. A file that cannot be counted becomes one item wi
 
 from __future__ import annotations
 
-import os
-import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -28,6 +26,7 @@ import numpy as np
 from numpy.lib import format as npformat
 
 from motion2robot.errors import UserError
+from motion2robot.util.files import special_file
 
 #: Extensions picked up when a folder is expanded.
 MOTION_EXTENSIONS = (".npy", ".npz", ".bvh", ".pt", ".pth", ".pkl", ".amc")
@@ -62,23 +61,6 @@ class Expansion:
     items: tuple[WorkItem, ...]
     skipped: tuple[tuple[str, str], ...] = ()
     count_errors: dict[str, str] = field(default_factory=dict)
-
-
-def special_file(path: Path) -> str | None:
-    """What ``path`` is when it is not a regular file or a missing one (a FIFO would block a
-    reader for ever), else None."""
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        return "is a broken symbolic link" if os.path.islink(path) else None
-    except OSError as err:
-        return f"cannot be examined ({err.strerror})"
-    for test, what in ((stat.S_ISDIR, "is a directory"), (stat.S_ISFIFO, "is a FIFO (named pipe)"),
-                       (stat.S_ISCHR, "is a character device"), (stat.S_ISBLK, "is a block device"),
-                       (stat.S_ISSOCK, "is a socket")):
-        if test(st.st_mode):
-            return what
-    return None
 
 
 def one_line(err: BaseException) -> str:

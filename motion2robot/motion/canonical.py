@@ -19,6 +19,7 @@ import numpy as np
 
 from motion2robot.motion.checks import check_fps, check_frames, check_magnitude, fail, numeric_positions
 from motion2robot.motion.height import stature
+from motion2robot.motion.plausibility import warn_implausible
 from motion2robot.motion.human import KP, SMPL22, HumanMotion
 
 #: Foot keypoints used for the floor and contacts: ankles and toes.
@@ -160,6 +161,7 @@ def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str
                          f"(expected {lo}-{hi} m; units?)",
                    "pass the right --units (m, cm, mm, inch, cmu) or --up if the skeleton lies on its side")
     pos = _canonical_positions_inplace(pos)  # pos is our own array (made by _rotate)
+    warn_implausible(path, pos, fps)
     info = {"up_axis": up, "up_axis_source": up_source, "units": units, "units_source": units_source,
             "source_fps": float(source_fps or fps)}
     return HumanMotion(pos, fps, contacts=contacts, meta={**(meta or {}), **info})

@@ -6,12 +6,13 @@ Every message reads "<path>: <problem>; <fix>" so the CLI can print it as is.
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from motion2robot.errors import InputFileError
+from motion2robot.errors import InputFileError, InputWarning
 from motion2robot.util.ranges import frame_ranges
 
 
@@ -68,6 +69,8 @@ def numeric_positions(path: str | Path, values: Any, what: str = "positions") ->
         if np.any(imag > 0):
             raise fail(path, f"{what} are complex numbers (imaginary parts up to {float(np.nanmax(imag)):.3g})",
                        "save real-valued coordinates")
+        warnings.warn(InputWarning(f"{path}: {what} are stored as complex numbers (all imaginary parts 0); "
+                                   "reading the real parts"), stacklevel=3)
         arr = arr.real
     if arr.dtype.kind not in "fiu":
         raise fail(path, f"{what} hold {arr.dtype} values, not numbers", "save a float array of coordinates")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -17,6 +18,10 @@ case("retarget: 3e38 in a HumanML3D file")(lambda d: ["retarget", str(npy(d, np.
     (np.arange(30)[:, None, None] == 7) & (np.arange(22)[None, :, None] == 20), 3e38, J))), "-o", str(d / "o.npz")])
 case("retarget: 1e20 wrist")(lambda d: ["retarget", str(npy(d, np.where(
     (np.arange(30)[:, None, None] == 9) & (np.arange(22)[None, :, None] == 21), 1e20, J))), "-o", str(d / "o.npz")])
+case("retarget: FIFO")(lambda d: (os.mkfifo(d / "f.npy"), ["retarget", str(d / "f.npy"), "-o", str(d / "o.npz")])[1])
+case("check: FIFO")(lambda d: (os.mkfifo(d / "f.npy"), ["check", str(d / "f.npy"), "--no-physics"])[1])
+case("stream: FIFO")(lambda d: (os.mkfifo(d / "f.npz"), ["stream", str(d / "f.npz"), "--dry-run"])[1])
+case("stream: /dev/zero")(lambda d: ["stream", "/dev/zero", "--dry-run", "--telemetry", str(d / "t.jsonl")])
 case("retarget: unknown robot")(lambda d: ["retarget", str(npy(d, J)), "--robot", "r2d2"])
 case("retarget: --iterations 0")(lambda d: ["retarget", str(npy(d, J)), "--iterations", "0"])
 case("retarget: --source-fps nan")(lambda d: ["retarget", str(npy(d, J)), "--source-fps", "nan"])
