@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from motion2robot.cli import main
-from motion2robot.errors import UserError
+from motion2robot.errors import InputFileError, UserError
 from motion2robot.hardware.calibration import Calibration
 from motion2robot.hardware.limits import JointLimits
 from motion2robot.hardware.obedience import ObedienceLimits
@@ -172,8 +172,11 @@ def _stream_process(tmp_path: Path, *args: str) -> tuple[subprocess.Popen, Path]
 def _wait_ticks(proc: subprocess.Popen, tel_path: Path, n: int) -> None:
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
-        if tel_path.exists() and len(read_telemetry(tel_path).ticks) >= n:
-            return
+        try:
+            if len(read_telemetry(tel_path).ticks) >= n:
+                return
+        except InputFileError:  # not written yet, or the header line still on its way
+            pass
         assert proc.poll() is None, proc.communicate()
         time.sleep(0.02)
     raise AssertionError("the stream did not start")

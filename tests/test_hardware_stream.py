@@ -16,6 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from motion2robot.errors import InputFileError
 from motion2robot.hardware.calibration import Calibration
 from motion2robot.hardware.dynamixel_bus import DynamixelBus
 from motion2robot.hardware.limits import JointLimits
@@ -209,8 +210,11 @@ def _streaming_process(tmp_path: Path, sig: int) -> tuple[subprocess.Popen, str,
     try:
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
-            if tel_path.exists() and len(read_telemetry(tel_path).ticks) > 50:
-                break
+            try:
+                if len(read_telemetry(tel_path).ticks) > 50:
+                    break
+            except InputFileError:  # not written yet, or the header line still on its way
+                pass
             assert proc.poll() is None, proc.communicate()
             time.sleep(0.1)
         proc.send_signal(sig)

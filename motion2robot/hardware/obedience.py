@@ -3,8 +3,9 @@
 The guard decides what may be sent; this module decides whether the servos are still doing what
 was sent. Each of these is a fault (a typed :class:`~motion2robot.hardware.errors.HardwareError`):
 
-- **Bus silent longer than the Bus Watchdog** (host clock, checked before every tick's write):
-  the servos have stopped themselves (a stalled process: SIGSTOP/SIGCONT, swap, a debugger).
+- **Bus silent longer than the Bus Watchdog** (host clock, checked after every transfer against
+  the start of the previous one, so a stall before or during a transfer counts): the servos
+  have stopped themselves (a stalled process: SIGSTOP/SIGCONT, swap, a debugger).
 - **Bus Watchdog state** (register 98, read back alternately with Hardware Error Status every
   ``state_every`` ticks, 0.25 s, so each every 0.5 s; in a tick with half a period to spare, or
   at the latest ``state_every`` ticks late, so the extra read does not make ticks overrun): 255
@@ -44,6 +45,14 @@ DEFAULT_COMPLIANCE_RAD = 0.2
 STATE_CHECK_S = 0.25  # one of the two state registers is read back every 0.25 s (each every 0.5 s)
 PERSIST_S = 0.05
 STATE_REGISTERS = ("bus_watchdog", "hardware_error_status")
+
+
+def hardware_alert(servo_id: int, joint: str, status: int | str) -> HardwareAlert:
+    """The fault of a servo reporting Hardware Error Status ``status`` (or why it is unreadable)."""
+    what = status if isinstance(status, str) else \
+        f"Hardware Error Status 0x{status:02X} ({describe_hardware_error(status)})"
+    return HardwareAlert(f"servo {servo_id} ({joint}): {what}; the servo cut its torque: remove the cause, then "
+                         f"'motion2robot servos reboot --id {servo_id}'", servo_id)
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,7 +103,7 @@ class ObedienceMonitor:
         self.last_heard = now
 
     def check_silence(self, now: float) -> None:
-        """Before a tick's first packet: a silence longer than the watchdog means the servos stopped."""
+        """After a transfer: a silence longer than the watchdog means the servos stopped."""
         if self.last_heard is None or self.limits.watchdog_s <= 0:
             return
         gap = now - self.last_heard
@@ -135,9 +144,7 @@ class ObedienceMonitor:
         for k, i in enumerate(self.ids):
             v = int(values[i])
             if register == "hardware_error_status" and v:
-                raise HardwareAlert(f"{self._who(k)}: Hardware Error Status 0x{v:02X} ({describe_hardware_error(v)}); "
-                                    f"the servo cut its torque: remove the cause, then "
-                                    f"'motion2robot servos reboot --id {i}'", i)
+                raise hardware_alert(i, self.cal.joints[k], v)
             if register == "bus_watchdog" and v != self.limits.watchdog_units:
                 what = ("tripped (register 98 reads 255): the servo stopped and refuses goals" if v & 0x80 else
                         f"reads {v} instead of the {self.limits.watchdog_units} armed")

@@ -33,7 +33,7 @@ from motion2robot.hardware.control_table import describe_hardware_error
 from motion2robot.hardware.errors import HardwareAlert, HardwareError, SafetyError
 from motion2robot.hardware.guard import SafetyGuard
 from motion2robot.hardware.limits import JointLimits
-from motion2robot.hardware.obedience import STATE_REGISTERS, ObedienceLimits, ObedienceMonitor
+from motion2robot.hardware.obedience import STATE_REGISTERS, ObedienceLimits, ObedienceMonitor, hardware_alert
 from motion2robot.hardware.policy import TorquePolicy
 from motion2robot.hardware.report import StreamReport
 from motion2robot.hardware.signals import StopSignals
@@ -118,13 +118,10 @@ class Streamer:
         i = ids[0]
         assert self.bus is not None
         try:
-            hes = self.bus.read(i, "hardware_error_status")
-            what = f"Hardware Error Status 0x{hes:02X} ({describe_hardware_error(hes)})"
+            hes: int | str = self.bus.read(i, "hardware_error_status")
         except HardwareError as err:
-            what = f"Alert bit set, Hardware Error Status unreadable ({err})"
-        j = self.cal.joints[self.ids.index(i)]
-        return HardwareAlert(f"servo {i} ({j}): {what}; the servo cut its torque: remove the cause, then "
-                             f"'motion2robot servos reboot --id {i}'", i)
+            hes = f"Alert bit set, Hardware Error Status unreadable ({err})"
+        return hardware_alert(i, self.cal.joints[self.ids.index(i)], hes)
 
     def _present(self) -> np.ndarray:
         assert self.bus is not None
@@ -172,8 +169,16 @@ class Streamer:
         """Read state registers back from every servo (Bus Watchdog, Hardware Error Status)."""
         assert self.bus is not None
         for reg in registers:
-            self.monitor.check_state(reg, self.bus.sync_read(reg, self.ids).values)
-        self.monitor.heard(clock())
+            self.monitor.check_state(reg, self._sent(self.bus.sync_read, reg, self.ids).values)
+
+    def _sent(self, call: Callable[..., Any], *args: Any) -> Any:
+        """One bus transfer; afterwards, a bus possibly silent for longer than the watchdog since the
+        previous transfer began (the process stopped before or during this one) is a fault."""
+        start = clock()
+        out = call(*args)
+        self.monitor.check_silence(clock())
+        self.monitor.heard(start)
+        return out
 
     # -- loop -----------------------------------------------------------------------------
     def _tick(self, target: np.ndarray | None, ramp: bool, phase: str, t0: float) -> np.ndarray:
@@ -181,10 +186,8 @@ class Streamer:
         goal = self.guard.next_goal(target, ramp)
         present = None
         if self.bus is not None:
-            self.monitor.check_silence(clock())
-            self.bus.sync_write("goal_position", dict(zip(self.ids, goal.tolist())))
-            present = self._present()
-            self.monitor.heard(clock())
+            self._sent(self.bus.sync_write, "goal_position", dict(zip(self.ids, goal.tolist())))
+            present = self._sent(self._present)
             spare = clock() < t0 + (self.k + 0.5) * self.dt  # half a period left: an extra read will not overrun
             reg = self.monitor.state_register(len(self.starts), spare)
             if reg:
