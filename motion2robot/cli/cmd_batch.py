@@ -45,7 +45,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
     from motion2robot.cli.read_options import read_args_kwargs
     from motion2robot.errors import UserError
     from motion2robot.robot import load_robot
@@ -58,8 +57,19 @@ def run(args: argparse.Namespace) -> int:
         from motion2robot.batch.ray_backend import import_ray
 
         import_ray()
+    from motion2robot.batch.results import batch_lock
+    from motion2robot.util.output import output_path
+
+    output_path(args.out, "results file")
     robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
     read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    with batch_lock(args.out):  # before the plan reads or --redo rewrites the results file
+        return _run_locked(args, robot, read_options, tqdm)
+
+
+def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
+    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
                       read_options=read_options, robot=robot.name)
     exp = plan.expansion

@@ -36,6 +36,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from motion2robot.validate import CheckOptions, check, verdict_table
 
+    from motion2robot.util.output import output_path
+
+    for out, what in ((args.json, "JSON report"), (args.html, "HTML report")):
+        if out:
+            output_path(out, what)  # before the work: a directory here is a user error
     motion, robot, human = load_motion_input(args.file, args)
     report = check(motion, robot, CheckOptions(physics=args.physics))
     print(verdict_table(report))

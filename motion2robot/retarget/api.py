@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from motion2robot.errors import SolverError, UserError
-from motion2robot.motion.human import KP, HumanMotion
+from motion2robot.motion.human import KP, SMPL22, HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget import native
 from motion2robot.retarget.anchor_gap import foot_capsules, separate_anchors
@@ -43,6 +43,7 @@ from motion2robot.retarget.constraints import (
 )
 from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted
 from motion2robot.retarget.costs import FRAME_TERMS, Weights
+from motion2robot.retarget.finite import check_solution, check_targets
 from motion2robot.retarget.problem import HMAX
 from motion2robot.retarget.executable import plan
 from motion2robot.retarget.root_pass import root_shift
@@ -260,6 +261,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     if opt.fps is not None and abs(opt.fps - human.fps) > 1e-9:
         human = resample(human, opt.fps)
     T = human.num_frames
+    where = human.meta.get("source", "the motion")
     _require_solvable(human)
     t_all = time.perf_counter()
     problem = compiled_problem(robot, opt.backend)
@@ -267,6 +269,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     spec, w = problem.spec, _rate_weights(opt.weights, human.fps)
     scale = opt.scale or auto_scale(human, robot)
     kp = scaled_keypoints(human.positions, scale)
+    check_targets(kp, SMPL22, where)
     if opt.contacts:
         labels, label_source = contact_labels(human)
         heel_up = int(labels.sum())
@@ -339,6 +342,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
         Q = shift.apply(Q)  # a rigid root motion moves every point with it; the capsule gaps stay
         pts = (shift.points(pts[0]), shift.points(pts[1]), shift.points(pts[2][:, None])[:, 0], pts[3])
     solve_s = time.perf_counter() - t_solve
+    check_solution(Q, robot.joint_names, where)
 
     terms, temporal = objective(problem, P2, Q, w)  # the final trajectory's objective (stage 2's)
     # contact residual against each phase's placement in its first frame of the final trajectory
