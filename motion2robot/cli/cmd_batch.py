@@ -34,8 +34,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    from motion2robot.cli.check_options import add_check_options
     from motion2robot.cli.read_options import add_read_options
 
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -44,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+    from motion2robot.cli.check_options import check_option_kwargs
     from motion2robot.cli.read_options import read_args_kwargs
     from motion2robot.errors import UserError
     from motion2robot.robot import load_robot
@@ -74,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())))
+                         read_options=tuple(sorted(read_options.items())),
+                         check_options=tuple(sorted(check_option_kwargs(args).items())))
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 
+from motion2robot.cli.check_options import add_check_options, check_option_kwargs
 from motion2robot.cli.motion_input import load_motion_input
 from motion2robot.cli.read_options import add_read_options
 
@@ -27,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="write a self-contained HTML report (verdict, reasons, plots, key frames)")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--clip", type=int, help="clip index of a multi-clip human motion file")
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -35,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2robot.validate import CheckOptions, check, verdict_table
 
     motion, robot, human = load_motion_input(args.file, args)
-    report = check(motion, robot, CheckOptions(physics=args.physics))
+    report = check(motion, robot, CheckOptions(physics=args.physics, **check_option_kwargs(args)))
     print(verdict_table(report))
     if args.json:
         print(f"report written to {report.to_json(args.json)}")
