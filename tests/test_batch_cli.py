@@ -69,6 +69,20 @@ def test_batch_writes_one_row_per_clip_and_resumes(tmp_path, capsys):
     assert len(_lines(out)) == 4 and "1 old rows removed" in capsys.readouterr().err
 
 
+def test_check_thresholds_reach_the_batch_workers(tmp_path, capsys):
+    """The same clip, judged with the default feet thresholds and with lax ones: the flags of
+    ``check`` reach ``batch``'s workers."""
+    data = tmp_path / "data"
+    _clips(data, 1)
+    strict, lax = tmp_path / "strict.jsonl", tmp_path / "lax.jsonl"
+    base = ["batch", str(data), "--robot", "op3", "--no-physics", "--jobs", "1", "-q"]
+    assert main([*base, "--out", str(strict)]) == 0
+    assert main([*base, "--out", str(lax), "--slip-speed", "100", "--swing-clearance", "1e-6"]) == 0
+    capsys.readouterr()
+    assert "ground" in _lines(strict)[0]["failed_checks"]
+    assert "ground" not in _lines(lax)[0]["failed_checks"]
+
+
 def test_unknown_robot_stops_before_any_work(tmp_path, capsys):
     _clips(tmp_path / "d", 1)
     assert main(["batch", str(tmp_path / "d"), "--robot", "no_such_robot", "--out", str(tmp_path / "r.jsonl")]) == 2
