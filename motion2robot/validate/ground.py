@@ -26,7 +26,7 @@ import numpy as np
 from motion2robot.validate.context import Context
 from motion2robot.validate.frames import frame_list, keep_runs
 from motion2robot.validate.models import body_name, floor_geom
-from motion2robot.validate.sole import SIDES, edge_points, point_name, swing_clearance, yaw_rate
+from motion2robot.validate.sole import SIDES, edge_motion, point_name, swing_clearance, yaw_rate
 
 
 def ground(ctx: Context) -> dict:
@@ -81,9 +81,7 @@ def feet_on_floor(ctx: Context) -> tuple[dict, np.ndarray]:
     opts, fps = ctx.options, ctx.kin.fps
     corners = ctx.kin.corners                                           # (T, 2, 4, 3)
     T = corners.shape[0]
-    pts = edge_points(corners)                                          # (T, 2, P, 3)
-    z = pts[..., 2]
-    speed = np.linalg.norm(np.diff(pts[..., :2], axis=0), axis=-1) * fps  # (T-1, 2, P)
+    z, speed = edge_motion(corners, fps)                                # (T, 2, P), (T-1, 2, P)
     touch = z < opts.touch_height
     planted = touch[:-1] & touch[1:]
     clearance = swing_clearance(ctx.robot, opts)

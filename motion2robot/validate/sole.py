@@ -5,7 +5,7 @@ back-left in the foot's frame, :meth:`~motion2robot.robot.config.FootConfig.corn
 points of the sole that can touch a flat floor first are on its edges: the part of a flat sole
 lower than a height is a convex region bounded by edges, and the speed of a rigid sole's points
 is a convex function of the point, so the fastest touching point is a corner or an edge point.
-:func:`edge_points` puts ``EDGE_SEGMENTS`` points on every edge (corners included); they move
+:func:`edge_motion` follows ``EDGE_SEGMENTS`` points on every edge (corners included); they move
 rigidly with the foot, so they are exact affine combinations of the corner positions.
 Units: metres, world frame z up.
 """
@@ -36,9 +36,13 @@ def _weights(k: int = EDGE_SEGMENTS) -> np.ndarray:
 WEIGHTS = _weights()
 
 
-def edge_points(corners: np.ndarray) -> np.ndarray:
-    """(..., 4, 3) sole corners -> (..., 4 * EDGE_SEGMENTS, 3) points along the sole's edges."""
-    return np.einsum("pc,...cd->...pd", WEIGHTS, corners)
+def edge_motion(corners: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Heights (T, 2, P) m of the edge points of (T, 2, 4, 3) sole corners, and their horizontal
+    speeds (T - 1, 2, P) m/s between consecutive frames (P = 4 * EDGE_SEGMENTS)."""
+    w = WEIGHTS.T                                                       # (4, P)
+    d = np.diff(corners[..., :2], axis=0)                               # (T-1, 2, 4, 2)
+    dx, dy = d[..., 0] @ w, d[..., 1] @ w
+    return corners[..., 2] @ w, np.sqrt(dx * dx + dy * dy) * fps
 
 
 def point_name(side: str, p: int, k: int = EDGE_SEGMENTS) -> str:
