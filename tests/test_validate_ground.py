@@ -115,3 +115,28 @@ def test_single_support_shrinks_the_polygon_to_one_foot(op3):
     support[:, 1] = False
     out = balance(replace(ctx, support=support))
     assert both > 0.02 and out["min_com_margin_m"] < 0 and not out["ok"]
+
+
+def test_a_sole_rolling_over_its_toe_edge_does_not_slip(op3):
+    """The left heel rises about the toe edge (0.4 rad in 1 s): the toe edge stays put, the
+    heel leaves the floor, nothing planted moves. Dragging the planted outer toe corner sideways
+    at 10 cm/s while rolling fails."""
+    ctx = ctx_of(op3, examples.standing(op3, seconds=1.0).qpos)
+    c0 = ctx.kin.corners[0, 0]                                 # front-left, front-right, back-right, back-left
+    toe = 0.5 * (c0[0] + c0[1])
+    fwd = toe - 0.5 * (c0[2] + c0[3])
+    length = np.linalg.norm(fwd[:2])
+    fwd = fwd / np.linalg.norm(fwd)
+    theta = np.linspace(0.0, 0.4, ctx.kin.num_frames)
+    rolled = np.repeat(ctx.kin.corners[:1], ctx.kin.num_frames, axis=0)
+    for k in (2, 3):  # heel corners: on an arc about the toe edge
+        side = c0[k] - (c0[k] - toe) @ fwd * fwd - toe      # sideways offset from the toe's centre line
+        rolled[:, 0, k] = toe + side - length * np.cos(theta)[:, None] * fwd
+        rolled[:, 0, k, 2] = c0[k, 2] + length * np.sin(theta)
+    out = ground(replace(ctx, kin=replace(ctx.kin, corners=rolled)))
+    assert out["ok"] and out["slipping"] == [] and out["skimming"] == []
+    dragged = rolled.copy()  # 2 mm per frame at 50 fps
+    dragged[:, 0, 0, :2] += np.outer(np.arange(len(dragged)) * 0.002, [fwd[1], -fwd[0]])
+    out = ground(replace(ctx, kin=replace(ctx.kin, corners=dragged)))
+    assert not out["ok"] and out["slipping"][0]["point"] == "outer toe corner"
+    assert out["slipping"][0]["speed_m_s"] == pytest.approx(0.1, rel=0.01)
