@@ -54,6 +54,7 @@ from motion2robot.retarget.smoothing import (
     smooth_hinges,
     smooth_jointly,
     smooth_to_targets,
+    spread_correction,
 )
 from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, objective
 from motion2robot.retarget.targets import frame_params, initial_qpos
@@ -164,6 +165,13 @@ def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.nda
         "max_constraint_residuals": {"floor": float(floor.max()), "contact": float(contact.max()),
                                      "balance": float(balance.max()), "self_collision": float(coll.max())},
     }
+
+
+def _free_limbs(robot: Robot) -> np.ndarray:
+    """(n,) bool hinges on no path from the root to a foot (arms, head, waist above the legs)."""
+    from motion2robot.validate.dynamics import foot_ancestor_mask
+
+    return ~foot_ancestor_mask(robot).any(axis=1)
 
 
 def _rate_weights(w: Weights, fps: float) -> Weights:
@@ -328,7 +336,11 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     if opt.smoothing:  # one filter for root and hinges together removes the solves' kinks; a last
         # projection takes the planted soles back where the filter moved them (to second order)
         Q = _smooth_configuration(Q, robot, human.fps, targets, root_target)
+        smooth = Q
         Q, _ = correct(problem, P2, Q, lo, hi, max_step, 1, extra=EXTRA_CORRECTIONS)
+        # the projection's pushes on free limbs (self-collision) spread over neighbouring frames
+        Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], _free_limbs(robot), human.fps)
+        Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps), lo, hi)
         pts = None
     zmp_figures = None
     if opt.balance and opt.dynamic_balance and opt.contacts:  # the ZMP, not only the CoM, inside the soles

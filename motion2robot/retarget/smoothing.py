@@ -186,3 +186,32 @@ def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps:
         m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
         y = _smooth(out, np.repeat(u, out.shape[1], axis=1), np.repeat(m, out.shape[1], axis=1))
     return y
+
+
+def spread_correction(before: np.ndarray, after: np.ndarray, joints: np.ndarray, fps: float,
+                      half_width: float = 0.2) -> np.ndarray:
+    """``after`` (T, n) hinge angles with the correction ``after - before`` of the ``joints`` (n,)
+    bool spread in time: each frame's correction becomes a raised-cosine bump of ``half_width``
+    seconds, and every joint takes, per sign, the largest bump over the frames near it. Every
+    frame keeps at least its own correction (same sign, same or larger size), so a limb pushed out
+    of the body stays out, but a push confined to one frame no longer makes a one-frame spike
+    (the projections onto self-collision do exactly that). Meant for joints that no equality
+    constraint holds (arms, head), where a larger push in the same direction is still feasible."""
+    out = np.array(after, dtype=np.float64)
+    if not np.any(joints) or len(out) < 3:
+        return out
+    w = max(1, int(round(half_width * fps)))
+    offsets = np.arange(-w, w + 1)
+    bump = 0.5 + 0.5 * np.cos(np.pi * offsets / (w + 1))            # (2w+1,), 1 at the centre
+    d = (after - before)[:, joints]
+    T = len(d)
+    pos = np.zeros_like(d)
+    neg = np.zeros_like(d)
+    for k, b in zip(offsets, bump):  # envelope(s) = max_t d(t) bump(s - t)
+        src = np.clip(np.arange(T) - k, 0, T - 1)
+        valid = ((np.arange(T) - k) >= 0) & ((np.arange(T) - k) < T)
+        shifted = np.where(valid[:, None], d[src], 0.0) * b
+        pos = np.maximum(pos, shifted)
+        neg = np.minimum(neg, shifted)
+    out[:, joints] = before[:, joints] + pos + neg
+    return out
