@@ -117,37 +117,47 @@ def _smooth(r: np.ndarray, u: np.ndarray, m: np.ndarray) -> np.ndarray:
     return pentadiagonal_solve(d0, d1, d2, r)
 
 
+def _steps(shape: tuple[int, ...], vtarget, atarget, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame speed and acceleration targets ((k,) per frame and per frame squared)."""
+    return (np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, shape),
+            np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, shape))
+
+
+def _irls(r: np.ndarray, vstep: np.ndarray, astep: np.ndarray, iterations: int, shared: bool) -> np.ndarray:
+    """Iteratively reweighted smoothing of ``r`` (T, k): the weights of rows over their targets
+    grow until none is (or ``iterations`` ran out); ``shared``: one weight per row for all columns."""
+    T, k = r.shape
+    cols = 1 if shared else k
+    u, m = np.zeros((T - 1, cols)), np.zeros((T - 2, cols))
+    y = r
+    for _ in range(iterations):
+        rv = np.abs(np.diff(y, axis=0)) / vstep
+        ra = np.abs(np.diff(y, 2, axis=0)) / astep
+        if shared:
+            rv, ra = rv.max(axis=1, keepdims=True), ra.max(axis=1, keepdims=True)
+        if rv.max() <= 1.0 and ra.max() <= 1.0:
+            break
+        u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
+        m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
+        y = _smooth(r, np.broadcast_to(u, (T - 1, k)), np.broadcast_to(m, (T - 2, k)))
+    return y
+
+
 def smooth_to_targets(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float,
                       iterations: int = 16) -> np.ndarray:
     """(T, k) trajectories near ``x`` with speed <= ``vtarget`` and acceleration <= ``atarget``
     ((k,) per second and per second squared, in x's unit; inf = no target) where the reweighting
     reached them. Columns already within both targets are returned unchanged."""
     out = np.array(x, dtype=np.float64)
-    T = len(out)
-    if T < 3:
+    if len(out) < 3:
         return out
-    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
-    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
+    vstep, astep = _steps(out.shape[1:], vtarget, atarget, fps)
     cols = np.flatnonzero((np.abs(np.diff(out, axis=0)) > vstep).any(axis=0)
                           | (np.abs(np.diff(out, 2, axis=0)) > astep).any(axis=0))
     if len(cols):
         r = out[:, cols]
         fast = native.smooth_irls(r, vstep[cols], astep[cols], iterations)
-        if fast is not None:
-            out[:, cols] = fast
-            return out
-        u = np.zeros((T - 1, len(cols)))
-        m = np.zeros((T - 2, len(cols)))
-        y = r
-        for _ in range(iterations):
-            rv = np.abs(np.diff(y, axis=0)) / vstep[cols]
-            ra = np.abs(np.diff(y, 2, axis=0)) / astep[cols]
-            if rv.max() <= 1.0 and ra.max() <= 1.0:
-                break
-            u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
-            m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
-            y = _smooth(r, u, m)
-        out[:, cols] = y
+        out[:, cols] = fast if fast is not None else _irls(r, vstep[cols], astep[cols], iterations, shared=False)
     return out
 
 
@@ -169,23 +179,10 @@ def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps:
     moves only to second order in the smoothed-away deviation: single-frame kinks the per-frame
     solves leave are removed without the projection that would put them back."""
     out = np.array(x, dtype=np.float64)
-    T = len(out)
-    if T < 3:
+    if len(out) < 3:
         return out
-    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
-    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
-    u = np.zeros((T - 1, 1))
-    m = np.zeros((T - 2, 1))
-    y = out
-    for _ in range(iterations):
-        rv = (np.abs(np.diff(y, axis=0)) / vstep).max(axis=1, keepdims=True)
-        ra = (np.abs(np.diff(y, 2, axis=0)) / astep).max(axis=1, keepdims=True)
-        if rv.max() <= 1.0 and ra.max() <= 1.0:
-            break
-        u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
-        m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
-        y = _smooth(out, np.repeat(u, out.shape[1], axis=1), np.repeat(m, out.shape[1], axis=1))
-    return y
+    vstep, astep = _steps(out.shape[1:], vtarget, atarget, fps)
+    return _irls(out, vstep, astep, iterations, shared=True)
 
 
 def spread_correction(before: np.ndarray, after: np.ndarray, joints: np.ndarray, fps: float,
