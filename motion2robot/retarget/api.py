@@ -67,6 +67,8 @@ from motion2robot.robot_motion import RobotMotion
 TEMPORAL_REFERENCE_FPS = 20.0
 #: Rounds of the ZMP planning stage at most.
 ZMP_ROUNDS = 2
+#: The ZMP planning stage is tried when the ZMP leaves the soles by at most this many sole lengths.
+ZMP_REACH = 2.0
 #: What ``legs`` may be.
 LEGS = ("auto", "whole", "stance")
 #: Factor on the floor weight in the first (free-feet) stage.
@@ -221,6 +223,11 @@ def _dynamic_balance(problem: CompiledProblem, kp: np.ndarray, labels: np.ndarra
     Q0, violation = Q, np.zeros(len(Q))
     zmp, com = multibody_zmp(Q, fps, robot)
     figures["zmp_outside_before_m"] = before = outside(zmp)
+    reach = ZMP_REACH * 2.0 * max(max(f.sole_half) for f in robot.config.feet)
+    if before > reach:  # spikes of a motion this fast are not a CoM shift away: not worth the rounds
+        figures["zmp_outside_after_m"] = before
+        figures["skipped"] = f"the ZMP is {before:.2f} m outside the soles, beyond {reach:.2f} m"
+        return Q, figures
     for _ in range(ZMP_ROUNDS):
         d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps)
         if np.abs(d).max() < MIN_SHIFT:
