@@ -35,7 +35,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     from motion2robot.cli.read_options import add_read_options
+    from motion2robot.cli.retarget_options import add_retarget_options
 
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -83,8 +85,11 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     if plan.bad_lines:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
+    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
+    if args.tempo_cap is not None:
+        retarget += (("tempo_cap", args.tempo_cap),)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())))
+                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:
