@@ -58,7 +58,8 @@ class FeasibilityJob:
         robot = load_robot(config.robot)
         options = RetargetOptions(**dict(getattr(config, "retarget_options", ()) or ()))
         _warm_up(robot, options)
-        return FeasibilityState(robot, options, CheckOptions(physics=config.physics))
+        checks = CheckOptions(physics=config.physics, **dict(getattr(config, "check_options", ())))
+        return FeasibilityState(robot, options, checks)
 
     @staticmethod
     def run(item: WorkItem, state: FeasibilityState, row: dict[str, Any], stage: list[str], config: Any) -> None:

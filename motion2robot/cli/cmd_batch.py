@@ -34,10 +34,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    from motion2robot.cli.check_options import add_check_options
     from motion2robot.cli.read_options import add_read_options
     from motion2robot.cli.retarget_options import add_retarget_options
 
     add_retarget_options(p)
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -69,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
     from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+    from motion2robot.cli.check_options import check_option_kwargs
 
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
                       read_options=read_options, robot=robot.name)
@@ -89,7 +92,8 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     if args.tempo_cap is not None:
         retarget += (("tempo_cap", args.tempo_cap),)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget)
+                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
+                         check_options=tuple(sorted(check_option_kwargs(args).items())))
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:

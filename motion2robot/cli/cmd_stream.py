@@ -60,6 +60,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--rest", choices=["nominal", "last"], default="nominal",
                    help="after the motion: ramp to the robot's nominal posture (default) or stay at the last frame")
     p.add_argument("--realtime", action="store_true", help="run the loop under SCHED_FIFO when permitted (root)")
+    p.add_argument("--sag-compensation", action="store_true",
+                   help="raise every goal by the sag its servo will have under the motion's own torques "
+                        "(tau/kp from inverse dynamics), as 'check --sag-compensation' plays it")
     p.set_defaults(func=run)
 
 
@@ -88,6 +91,11 @@ def run(args: argparse.Namespace) -> int:
     offsets = load_calibration(args.calibration) if args.calibration else None
     cal = Calibration.from_servo_map(servo_map, offsets)
     joint_trajectory(motion, cal.joints)  # fail early on a motion for another robot
+    if args.sag_compensation:
+        from motion2robot.validate.sag import compensated_motion
+
+        motion = compensated_motion(motion, robot)
+        print(f"sag compensation: goals raised by up to {motion.meta['sag_compensation']:.3f} rad", flush=True)
     hinge = {n: i for i, n in enumerate(robot.joint_names)}
     rest = None if args.rest == "last" else np.array([robot.nominal_qpos[7 + hinge[j]] for j in cal.joints])
     telemetry = str(output_path(args.telemetry or str(Path(args.motion).with_suffix("")) + ".telemetry.jsonl",

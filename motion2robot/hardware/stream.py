@@ -1,7 +1,8 @@
 """Stream a RobotMotion to servos at a fixed rate.
 
-Per tick (absolute deadlines ``t0 + k / rate``): interpolate the motion at the tick time, let the
-:class:`~motion2robot.hardware.guard.SafetyGuard` turn it into goal ticks, sync-write the goals,
+Per tick (absolute deadlines ``t0 + k / rate``): interpolate the motion at the tick's play time
+(:mod:`~motion2robot.hardware.goals`, the schedule the physics rollout of ``check`` plays too), let
+the :class:`~motion2robot.hardware.guard.SafetyGuard` turn it into goal ticks, sync-write the goals,
 sync-read present positions (fast sync read where supported) and their status bytes, write a
 telemetry line. Missed deadlines are counted as overruns and skipped (no catch-up burst).
 Whether the servos still obey is checked on every tick by
@@ -31,6 +32,7 @@ from motion2robot.hardware.bus import ServoBus
 from motion2robot.hardware.calibration import Calibration
 from motion2robot.hardware.control_table import describe_hardware_error
 from motion2robot.hardware.errors import HardwareAlert, HardwareError, SafetyError
+from motion2robot.hardware.goals import play_target
 from motion2robot.hardware.guard import SafetyGuard
 from motion2robot.hardware.limits import JointLimits
 from motion2robot.hardware.obedience import STATE_REGISTERS, ObedienceLimits, ObedienceMonitor, hardware_alert
@@ -217,7 +219,7 @@ class Streamer:
     def _run(self, sig: StopSignals, t0: float) -> str:
         """Ramp in, play, ramp out, hold on end; returns the stop reason or raises _Stop."""
         phase = "ramp_in"
-        play_t0 = 0.0
+        play_k0 = 0  # the first play tick; play tick k asks for the motion at k / rate (hardware.goals)
         hold_until = None
         while True:
             if sig.count:
@@ -228,12 +230,9 @@ class Streamer:
             if phase == "ramp_in":
                 target, ramp = self.traj[0], True
             elif phase == "play":
-                tm = now - play_t0
-                if tm > self.duration and self.loop and self.duration > 0:
-                    tm %= self.duration
-                elif tm > self.duration:
+                target, ramp = play_target(self.traj, self.fps, self.rate, self.k - play_k0, self.loop), False
+                if target is None:
                     phase = "ramp_out" if self.rest is not None and self.policy.ramp_out else "hold"
-                target, ramp = (sample(self.traj, self.fps, tm), False) if phase == "play" else (None, False)
             if phase == "ramp_out":
                 target, ramp = self.rest, True
             if phase == "hold":
@@ -242,7 +241,7 @@ class Streamer:
                 target, ramp = None, False
             self._tick(target, ramp, phase, t0)
             if phase == "ramp_in" and self.guard.reached(self.traj[0]):
-                phase, play_t0 = "play", t0 + (self.k + 1) * self.dt
+                phase, play_k0 = "play", self.k + 1
             elif phase == "ramp_out" and self.guard.reached(self.rest):
                 phase = "hold"
             elif phase == "hold" and hold_until is not None and now >= hold_until:

@@ -261,6 +261,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     if opt.fps is not None and abs(opt.fps - human.fps) > 1e-9:
         human = resample(human, opt.fps)
     T = human.num_frames
+    where = human.meta.get("source", "the motion")
     _require_solvable(human)
     where = human.meta.get("source", "the motion")
     t_all = time.perf_counter()

@@ -24,7 +24,9 @@ def _figure(name: str, c: dict) -> str:
     if name == "self_collision":
         return f"deepest {g('max_depth_m', 0) * 1000:.1f} mm"
     if name == "ground":
-        return f"penetration {g('max_penetration_m', 0) * 1000:.1f} mm, skating {len(g('skating_frames', []))} frames"
+        return (f"penetration {g('max_penetration_m', 0) * 1000:.1f} mm, planted soles up to "
+                f"{g('max_slip_m_s', 0) * 100:.1f} cm/s, slipping {len(g('slipping_frames', []))} frames, "
+                f"skimming {len(g('skimming_frames', []))} frames")
     if name == "balance":
         zm, cm = g("min_zmp_margin_m"), g("min_com_margin_m")
         s = "ZMP margin " + ("n/a" if zm is None else f"{zm * 1000:+.0f} mm")
