@@ -278,6 +278,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     T = human.num_frames
     where = human.meta.get("source", "the motion")
     _require_solvable(human)
+    where = human.meta.get("source", "the motion")
     t_all = time.perf_counter()
     problem = compiled_problem(robot, opt.backend)
     native.library()  # the smoothing/clamp kernels: built on first use, like the problem's code
