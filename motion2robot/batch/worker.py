@@ -27,9 +27,10 @@ from motion2robot.batch.work import WorkItem, one_line
 class BatchConfig:
     """What every worker needs. robot: robot name or config path; physics: run the MuJoCo rollout;
     save_motions: folder for the retargeted motions (None: not saved); read_options: (name, value)
-    pairs passed to ``read_motion`` (format, fps, mean, std, units, up, name_map); job:
-    ``"module:attr"`` of the job object (None: :class:`~motion2robot.batch.feasibility.FeasibilityJob`);
-    check_options: (name, value) pairs of CheckOptions fields (thresholds, sag compensation)."""
+    pairs passed to ``read_motion`` (format, fps, mean, std, units, up, name_map); retarget_options:
+    (name, value) pairs of RetargetOptions fields (tempo, legs, tempo_cap, balance); check_options:
+    (name, value) pairs of CheckOptions fields (thresholds, sag compensation); job:
+    ``"module:attr"`` of the job object (None: :class:`~motion2robot.batch.feasibility.FeasibilityJob`)."""
 
     robot: str
     physics: bool = True
@@ -37,6 +38,7 @@ class BatchConfig:
     read_options: tuple[tuple[str, Any], ...] = ()
     check_options: tuple[tuple[str, Any], ...] = ()
     job: str | None = None
+    retarget_options: tuple[tuple[str, Any], ...] = ()
 
 
 #: At most this many distinct warnings are kept per row.
