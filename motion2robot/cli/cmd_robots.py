@@ -126,8 +126,17 @@ def _init(args: argparse.Namespace) -> int:
         raise UserError(f"{out}: already exists; pass --force to overwrite it or choose another -o path")
     name = args.name or out.stem
     draft = draft_config(args.model, name=name)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise UserError(f"{out.parent}: cannot create the output folder ({err.strerror}); choose another -o path") from err
     write_draft(draft, out)
     print(f"wrote {out} (draft config for {args.model}: {draft.n_joints} hinges)")
+    print("\nkeypoints:")
+    rows = [("HUMAN", "ROBOT BODY", "OFFSET m", "WHY")]
+    for k in draft.keypoints:
+        rows.append((k.human, k.body, "(" + ", ".join(f"{v:+.3f}" for v in k.offset) + ")", k.note or "-"))
+    print("\n".join("  " + ln for ln in _table(rows, emit=False)))
     print("\nguessed:")
     for g in draft.guesses:
         print(f"  - {g}")

@@ -82,6 +82,17 @@ def draft_joints(skel: "Skeleton") -> tuple[list[JointDraft], float, float, floa
     kp_default = float(np.median([jd.kp for jd in out])) if out else 20.0
     return out, DEFAULT_VELOCITY, round(default_t, 3), round(kp_default, 3)
 
+def round_inside(v: float, lo: float, hi: float, nd: int = 4) -> float:
+    """``v`` rounded to ``nd`` decimals, towards the inside of [lo, hi] where plain rounding would
+    leave it (Talos: 0.008727 rounds to 0.0087, below its lower limit)."""
+    r, step = round(v, nd), 10.0 ** -nd
+    if r < lo:
+        r = np.ceil(lo / step) * step
+    if r > hi:
+        r = np.floor(hi / step) * step
+    return round(float(r), nd + 2) + 0.0
+
+
 def draft_nominal(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft]) -> dict:
     """Zeros (clipped into the ranges) with the knees bent :data:`KNEE_BEND` where the hip, knee and
     ankle pitch joints are found: hip and ankle pitch -KNEE_BEND/2, so pelvis and soles stay level."""
@@ -104,16 +115,55 @@ def draft_nominal(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft]) -
         want = {hip: -KNEE_BEND / 2, knee: KNEE_BEND, ankle: -KNEE_BEND / 2}  # rotations about world +y
         q = {j: phi / float(np.sign(skel.d.xaxis[j][1])) for j, phi in want.items()}
         if all(bounds(j)[0] <= v <= bounds(j)[1] for j, v in q.items()):
-            nominal.update({skel.jname(j): round(v, 4) for j, v in q.items()})
+            nominal.update({skel.jname(j): round_inside(v, *bounds(j)) for j, v in q.items()})
         else:
             skel.checks.append(f"{s} leg: a {KNEE_BEND} rad knee bend is outside the joint ranges; nominal knees left straight")
     for j in range(1, m.njnt):
         lo, hi = bounds(j)
         if not lo <= 0.0 <= hi and skel.jname(j) not in nominal:
-            nominal[skel.jname(j)] = round(float(np.clip(0.0, lo, hi)), 4)
+            nominal[skel.jname(j)] = round_inside(float(np.clip(0.0, lo, hi)), lo, hi)
     skel.guesses.append("nominal: " + (", ".join(f"{k} = {v:+.3f}" for k, v in nominal.items()) or "all zero")
                         + "; arms as in the model's zero pose")
     return nominal
+
+
+def clear_arms(skel: "Skeleton", arms: dict, joints: dict[str, JointDraft], nominal: dict, step: float = 0.05,
+               most: float = 0.6) -> dict:
+    """Abduct each arm (its shoulder joint whose axis runs along x) in ``step`` rad steps, up to
+    ``most``, while its bodies touch another body at the nominal posture (Talos' hands rest in its
+    thighs at qpos0). Contacts as MuJoCo finds them in the model."""
+    m = skel.m
+    d = mujoco.MjData(m)
+    out = dict(nominal)
+
+    def touching(bodies: set[int]) -> bool:
+        d.qpos[:] = m.qpos0
+        for j in range(1, m.njnt):
+            d.qpos[m.jnt_qposadr[j]] = out.get(skel.jname(j), d.qpos[m.jnt_qposadr[j]])
+        mujoco.mj_forward(m, d)
+        return any((int(m.geom_bodyid[c.geom[0]]) in bodies) != (int(m.geom_bodyid[c.geom[1]]) in bodies)
+                   for c in d.contact[: d.ncon])
+
+    for side, arm in arms.items():
+        if "roll" not in arm:
+            continue
+        j, bodies = arm["roll"], set(arm["bodies"])
+        name = skel.jname(j)
+        jd = joints[name]
+        lo, hi = jd.range if jd.range else (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1]))
+        sign = (1.0 if side == "left" else -1.0) / float(np.sign(skel.d.xaxis[j][0]))  # outwards
+        start = out.get(name, 0.0)
+        moved = 0.0
+        while touching(bodies) and moved < most:
+            moved += step
+            v = start + sign * moved
+            if not lo <= v <= hi:
+                break
+            out[name] = round_inside(v, lo, hi)
+        if moved:
+            skel.guesses.append(f"{side} arm touched the body at the nominal pose: {name} = {out.get(name, start):+.3f} "
+                                "(abducted until clear)")
+    return out
 
 
 def stiffen_ankles(skel: "Skeleton", legs: dict, joints: list[JointDraft]) -> list[JointDraft]:
