@@ -143,3 +143,21 @@ def test_unlimited_hinge_without_a_range_is_one_line_exit_2(tmp_path, capsys):
     assert main(["robots", "show", str(cfg)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "p_j1 has no range" in err and "add [joints.p_j1] range" in err
+
+
+def test_show_render_marks_the_keypoints(tmp_path, capsys):
+    """``robots show --render``: a picture with the keypoint colours on it (offscreen GL)."""
+    from PIL import Image
+
+    from motion2robot.viz.keypoint_image import LEFT_RGBA, RIGHT_RGBA
+
+    out = tmp_path / "op3.png"
+    assert main(["robots", "show", "op3", "--render", str(out)]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    assert img.shape[1] > img.shape[0]  # front and side views
+    for rgba in (LEFT_RGBA, RIGHT_RGBA):
+        target = (np.asarray(rgba[:3]) * 255).astype(int)
+        near = np.abs(img - target).sum(axis=2) < 90
+        assert near.sum() > 20, rgba  # the balls of that side are drawn
+    assert main(["robots", "show", "op3", "--render", str(tmp_path / "op3.gif")]) == 2
