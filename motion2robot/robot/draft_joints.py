@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from motion2robot.robot.collision_filter import tested_geom_pairs
 from motion2robot.robot.draft_types import JointDraft
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -127,42 +128,57 @@ def draft_nominal(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft]) -
     return nominal
 
 
+#: m; the nominal posture keeps each arm this far from the trunk and legs (where its range allows).
+ARM_CLEARANCE = 0.03
+
+
 def clear_arms(skel: "Skeleton", arms: dict, joints: dict[str, JointDraft], nominal: dict, step: float = 0.05,
                most: float = 0.6) -> dict:
     """Abduct each arm (its shoulder joint whose axis runs along x) in ``step`` rad steps, up to
-    ``most``, while its bodies touch another body at the nominal posture (Talos' hands rest in its
-    thighs at qpos0). Contacts as MuJoCo finds them in the model."""
+    ``most``, while the bodies below that joint are closer than :data:`ARM_CLEARANCE` to the rest
+    of the robot at the nominal posture and abducting helps (Talos' hands rest in its thighs and
+    the G1's upper arms touch its torso at qpos0: a retargeter must keep those apart from the
+    start). Distances between the geom pairs MuJoCo tests (``mj_geomDistance``)."""
     m = skel.m
     d = mujoco.MjData(m)
     out = dict(nominal)
+    tested = tested_geom_pairs(m)
+    fromto = np.zeros(6)
 
-    def touching(bodies: set[int]) -> bool:
+    def gap(pairs: list[tuple[int, int]]) -> float:
         d.qpos[:] = m.qpos0
         for j in range(1, m.njnt):
             d.qpos[m.jnt_qposadr[j]] = out.get(skel.jname(j), d.qpos[m.jnt_qposadr[j]])
-        mujoco.mj_forward(m, d)
-        return any((int(m.geom_bodyid[c.geom[0]]) in bodies) != (int(m.geom_bodyid[c.geom[1]]) in bodies)
-                   for c in d.contact[: d.ncon])
+        mujoco.mj_kinematics(m, d)
+        return min((mujoco.mj_geomDistance(m, d, a, b, ARM_CLEARANCE, fromto) for a, b in pairs), default=ARM_CLEARANCE)
 
     for side, arm in arms.items():
         if "roll" not in arm:
             continue
-        j, bodies = arm["roll"], set(arm["bodies"])
+        j = arm["roll"]
+        below = set(skel.subtree(int(m.jnt_bodyid[j]))) - {int(m.jnt_bodyid[j])}
+        rest = set(range(1, m.nbody)) - set(arm["bodies"])
+        pairs = [(a, b) for a in range(m.ngeom) if int(m.geom_bodyid[a]) in below
+                 for b in range(m.ngeom) if int(m.geom_bodyid[b]) in rest and tested[a, b]]
         name = skel.jname(j)
         jd = joints[name]
         lo, hi = jd.range if jd.range else (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1]))
         sign = (1.0 if side == "left" else -1.0) / float(np.sign(skel.d.xaxis[j][0]))  # outwards
         start = out.get(name, 0.0)
-        moved = 0.0
-        while touching(bodies) and moved < most:
-            moved += step
-            v = start + sign * moved
+        moved, now = 0.0, gap(pairs)
+        while now < ARM_CLEARANCE and moved < most - 1e-9:
+            v = start + sign * (moved + step)
             if not lo <= v <= hi:
                 break
             out[name] = round_inside(v, lo, hi)
+            after = gap(pairs)
+            if after <= now + 1e-4:  # abducting does not help
+                out[name] = round_inside(start + sign * moved, lo, hi) if moved else start
+                break
+            moved, now = moved + step, after
         if moved:
-            skel.guesses.append(f"{side} arm touched the body at the nominal pose: {name} = {out.get(name, start):+.3f} "
-                                "(abducted until clear)")
+            skel.guesses.append(f"{side} arm {1000 * now:.0f} mm from the body at the nominal pose after abducting it: "
+                                f"{name} = {out[name]:+.3f}")
     return out
 
 
