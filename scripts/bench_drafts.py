@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from motion2robot.motion import read_motion  # noqa: E402
-from motion2robot.retarget import retarget  # noqa: E402
+from motion2robot.retarget import RetargetOptions, retarget  # noqa: E402
 from motion2robot.retarget.metrics import acceptance  # noqa: E402
 from motion2robot.robot import load_robot  # noqa: E402
 from motion2robot.robot.draft import draft_config, write_draft  # noqa: E402
@@ -47,7 +47,7 @@ def clips(n: int):
     return out
 
 
-def judge(name: str, humans, workdir: Path) -> dict:
+def judge(name: str, humans, workdir: Path, options: RetargetOptions) -> dict:
     draft = draft_config(f"menagerie:{name}", name=f"{name}_draft")
     robot = load_robot(str(write_draft(draft, workdir / f"{name}.toml")))
     err = keypoint_errors(name, robot)
@@ -57,7 +57,7 @@ def judge(name: str, humans, workdir: Path) -> dict:
            "coll_mm": 0.0, "frames": 0, "seconds": 0.0}
     for _, human in humans:
         t0 = time.perf_counter()
-        motion = retarget(human, robot)
+        motion = retarget(human, robot, options)
         row["seconds"] += time.perf_counter() - t0
         a = acceptance(motion, robot, collisions=False)
         rep = check(motion, robot, CheckOptions(physics=False))
@@ -76,7 +76,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--robots", default=",".join(JOINTS), help="comma-separated Menagerie folder names")
     ap.add_argument("--clips", type=int, default=5, help="HumanML3D joint clips of ../shared/motions (plus the demo)")
+    ap.add_argument("--backend", default=None, help="retarget backend (default: compiled C; 'vm': no compilation)")
     args = ap.parse_args()
+    options = RetargetOptions() if args.backend is None else RetargetOptions(backend=args.backend)
     if not os.environ.get("MENAGERIE_ROOT"):
         sys.exit("set MENAGERIE_ROOT (e.g. ../shared/menagerie)")
     humans = clips(args.clips)
@@ -86,7 +88,7 @@ def main() -> None:
     print(head)
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.robots.split(","):
-            r = judge(name, humans, Path(tmp))
+            r = judge(name, humans, Path(tmp), options)
             kp = f"{r['kp_mean_mm']:.1f} / {r['kp_max_mm']:.1f} ({r['kp_worst']}, {r['n_kp']} kps)"
             print(f"{name:12s} {r['hinges']:6d} {kp:>34s} {r['overlaps']:12d} {r['limit']:10d} {r['below']:18d} "
                   f"{r['sole_mm']:7.2f} {r['coll_frames']:16d} {r['coll_mm']:10.2f} {r['frames'] / r['seconds']:8.0f}",

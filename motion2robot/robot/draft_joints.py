@@ -182,6 +182,65 @@ def clear_arms(skel: "Skeleton", arms: dict, joints: dict[str, JointDraft], nomi
     return out
 
 
+#: m; the nominal stance keeps the feet this far apart (where hip and ankle roll joints allow).
+FEET_CLEARANCE = 0.03
+
+
+def spread_feet(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft], nominal: dict, step: float = 0.005,
+                most: float = 0.1) -> dict:
+    """Roll both legs outwards at the hips, and the ankles back so the soles stay flat, in ``step``
+    rad steps up to ``most``, while the feet are closer than :data:`FEET_CLEARANCE` at the nominal
+    posture (the OP3's are 17 mm apart at qpos0, where a retargeter has no room to keep them
+    apart). Distances between the geom pairs MuJoCo tests."""
+    m = skel.m
+    d = mujoco.MjData(m)
+    tested = tested_geom_pairs(m)
+    fromto = np.zeros(6)
+
+    def roll(bodies: list[int]) -> int | None:
+        ids = [j for j in range(1, m.njnt) if int(m.jnt_bodyid[j]) in bodies and abs(skel.d.xaxis[j][0]) > 0.9]
+        return ids[0] if ids else None
+
+    hips = {s: roll(leg["hip"]) for s, leg in legs.items()}
+    ankles = {s: roll(leg["ankle"]) for s, leg in legs.items()}
+    if None in hips.values() or None in ankles.values():
+        return nominal
+    feet = [set(skel.subtree(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, legs[s]["foot"].body))) for s in ("left", "right")]
+    pairs = [(a, b) for a in range(m.ngeom) if int(m.geom_bodyid[a]) in feet[0]
+             for b in range(m.ngeom) if int(m.geom_bodyid[b]) in feet[1] and tested[a, b]]
+
+    def posture(a: float) -> dict | None:
+        out = dict(nominal)
+        for s, sign in (("left", 1.0), ("right", -1.0)):
+            for j, phi in ((hips[s], sign * a), (ankles[s], -sign * a)):
+                jd = joints[skel.jname(j)]
+                lo, hi = jd.range if jd.range else (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1]))
+                v = out.get(skel.jname(j), 0.0) + phi / float(np.sign(skel.d.xaxis[j][0]))
+                if not lo <= v <= hi:
+                    return None
+                out[skel.jname(j)] = round_inside(v, lo, hi)
+        return out
+
+    def gap(q: dict) -> float:
+        d.qpos[:] = m.qpos0
+        for j in range(1, m.njnt):
+            d.qpos[m.jnt_qposadr[j]] = q.get(skel.jname(j), d.qpos[m.jnt_qposadr[j]])
+        mujoco.mj_kinematics(m, d)
+        return min((mujoco.mj_geomDistance(m, d, a, b, FEET_CLEARANCE, fromto) for a, b in pairs), default=FEET_CLEARANCE)
+
+    best, a = nominal, 0.0
+    while gap(best) < FEET_CLEARANCE and a < most - 1e-9:
+        a += step
+        q = posture(a)
+        if q is None:
+            break
+        best = q
+    if best is not nominal:
+        skel.guesses.append(f"feet {1000 * gap(best):.0f} mm apart at the nominal pose after rolling the legs out "
+                            f"{a:.3f} rad at the hips (ankles back, soles flat)")
+    return best
+
+
 def stiffen_ankles(skel: "Skeleton", legs: dict, joints: list[JointDraft]) -> list[JointDraft]:
     """Standing on servos alone, the body pivots on its ankles like an inverted pendulum: each
     ankle joint needs kp > M g h / 2 (M total mass, h CoM height above the ankles at qpos0). Raise

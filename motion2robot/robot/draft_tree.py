@@ -9,7 +9,7 @@ import numpy as np
 
 from motion2robot.errors import RobotConfigError
 from motion2robot.robot import body_geometry as geo
-from motion2robot.robot.draft_joints import clear_arms, draft_joints, draft_nominal, stiffen_ankles
+from motion2robot.robot.draft_joints import clear_arms, draft_joints, draft_nominal, spread_feet, stiffen_ankles
 from motion2robot.robot.draft_limb import MEET_TOL, group_joints, pick_shoulder_elbow_wrist
 from motion2robot.robot.draft_types import Draft, FootDraft, KeypointDraft, rounded
 
@@ -115,6 +115,7 @@ class Skeleton:
         joints = stiffen_ankles(self, legs, joints)
         nominal = draft_nominal(self, legs, {j.name: j for j in joints})
         nominal = clear_arms(self, arms, {j.name: j for j in joints}, nominal)
+        nominal = spread_feet(self, legs, {j.name: j for j in joints}, nominal)
         return Draft(
             name=name, model_ref=ref, mjcf=mjcf, menagerie=menagerie, entry=entry,
             root_body=self.bname(self.root), torso_body=self.bname(torso),
