@@ -28,7 +28,8 @@ def ctx_of(robot, q, fps=50.0, meta=None, **opts):
 def test_standing_touches_the_floor_without_penetration_or_skating(op3):
     out = ground(ctx_of(op3, examples.standing(op3).qpos))
     assert out["ok"] and out["max_penetration_m"] < 1e-3
-    assert out["penetrations"] == [] and out["skating"] == [] and out["non_foot_contacts"] == []
+    assert out["penetrations"] == [] and out["slipping"] == [] and out["skimming"] == []
+    assert out["non_foot_contacts"] == [] and out["max_slip_m_s"] < 1e-6
 
 
 def test_sinking_into_the_floor_fails_with_the_depth(op3):
@@ -41,27 +42,49 @@ def test_sinking_into_the_floor_fails_with_the_depth(op3):
     assert out["max_penetration_m"] == pytest.approx(0.02, abs=2e-3)
 
 
-def test_feet_sliding_on_the_floor_is_skating(op3):
+def test_feet_sliding_on_the_floor_slip(op3):
     q = examples.standing(op3).qpos.copy()
     q[:, 0] += 0.4 * np.arange(len(q)) / 50.0  # the whole robot glides at 0.4 m/s
     out = ground(ctx_of(op3, q))
-    assert not out["ok"] and {v["foot"] for v in out["skating"]} == {"left", "right"}
-    assert out["skating"][0]["speed_m_s"] == pytest.approx(0.4, rel=0.02)
-    assert out["max_penetration_m"] < 1e-3
+    assert not out["ok"] and {(v["foot"], v["kind"]) for v in out["slipping"]} == {("left", "slide"), ("right", "slide")}
+    assert out["slipping"][0]["speed_m_s"] == pytest.approx(0.4, rel=0.02)
+    assert out["max_penetration_m"] < 1e-3 and out["skimming"] == []
 
 
-def test_contact_labels_decide_skating_from_a_low_swing(op3):
-    """With labels, a foot moving fast just above the floor while labelled in the air is a low
-    swing (scuff risk, not a verdict); the same foot labelled in contact is skating."""
+def test_a_slow_slide_fails_and_the_threshold_is_an_option(op3):
+    """2 cm/s is far below the old 0.15 m/s skating line, but a planted sole must not move at all
+    (> 1 cm/s fails); the line is ``slip_speed``."""
+    q = examples.standing(op3).qpos.copy()
+    q[:, 0] += 0.02 * np.arange(len(q)) / 50.0
+    assert not ground(ctx_of(op3, q))["ok"]
+    assert ground(ctx_of(op3, q, slip_speed=0.03))["ok"]
+
+
+def test_contact_labels_do_not_excuse_a_sliding_sole(op3):
+    """The floor does not read the motion's labels: soles on the floor that move slip even while
+    labelled in the air."""
     q = examples.standing(op3).qpos.copy()
     q[:, 0] += 0.4 * np.arange(len(q)) / 50.0
     swing = np.zeros((len(q), 2), dtype=bool)
-    swing_out = ground(ctx_of(op3, q, meta={"contacts": swing.tolist()}))
-    assert swing_out["ok"] and swing_out["skating"] == []
-    assert swing_out["low_swing_frames"] and swing_out["low_swing_frames"][0] <= 2
-    stance = ~swing
-    stance_out = ground(ctx_of(op3, q, meta={"contacts": stance.tolist()}))
-    assert not stance_out["ok"] and {v["foot"] for v in stance_out["skating"]} == {"left", "right"}
+    out = ground(ctx_of(op3, q, meta={"contacts": swing.tolist()}))
+    assert not out["ok"] and {v["foot"] for v in out["slipping"]} == {"left", "right"}
+
+
+@pytest.mark.parametrize(("lift", "fails"), [(0.003, True), (0.02, False)])
+def test_feet_gliding_just_above_the_floor_skim(op3, lift, fails):
+    """3 mm above the floor is within the OP3's 5 mm clearance: a moving foot there skims; 2 cm
+    above, it is clear of the floor."""
+    q = examples.standing(op3).qpos.copy()
+    q[:, 2] += lift
+    q[:, 0] += 0.1 * np.arange(len(q)) / 50.0
+    out = ground(ctx_of(op3, q))
+    assert out["swing_clearance_m"] == pytest.approx(0.0052, abs=5e-4)
+    assert out["slipping"] == [] and out["ok"] is not fails
+    if fails:
+        assert {v["foot"] for v in out["skimming"]} == {"left", "right"}
+        assert out["skimming"][0]["height_m"] == pytest.approx(lift, abs=5e-4)
+        assert out["skimming"][0]["speed_m_s"] == pytest.approx(0.1, rel=0.02)
+    assert ground(ctx_of(op3, q, swing_clearance=lift / 2))["ok"]
 
 
 def test_balance_flags_flight_and_reports_margins(op3):
@@ -92,3 +115,28 @@ def test_single_support_shrinks_the_polygon_to_one_foot(op3):
     support[:, 1] = False
     out = balance(replace(ctx, support=support))
     assert both > 0.02 and out["min_com_margin_m"] < 0 and not out["ok"]
+
+
+def test_a_sole_rolling_over_its_toe_edge_does_not_slip(op3):
+    """The left heel rises about the toe edge (0.4 rad in 1 s): the toe edge stays put, the
+    heel leaves the floor, nothing planted moves. Dragging the planted outer toe corner sideways
+    at 10 cm/s while rolling fails."""
+    ctx = ctx_of(op3, examples.standing(op3, seconds=1.0).qpos)
+    c0 = ctx.kin.corners[0, 0]                                 # front-left, front-right, back-right, back-left
+    toe = 0.5 * (c0[0] + c0[1])
+    fwd = toe - 0.5 * (c0[2] + c0[3])
+    length = np.linalg.norm(fwd[:2])
+    fwd = fwd / np.linalg.norm(fwd)
+    theta = np.linspace(0.0, 0.4, ctx.kin.num_frames)
+    rolled = np.repeat(ctx.kin.corners[:1], ctx.kin.num_frames, axis=0)
+    for k in (2, 3):  # heel corners: on an arc about the toe edge
+        side = c0[k] - (c0[k] - toe) @ fwd * fwd - toe      # sideways offset from the toe's centre line
+        rolled[:, 0, k] = toe + side - length * np.cos(theta)[:, None] * fwd
+        rolled[:, 0, k, 2] = c0[k, 2] + length * np.sin(theta)
+    out = ground(replace(ctx, kin=replace(ctx.kin, corners=rolled)))
+    assert out["ok"] and out["slipping"] == [] and out["skimming"] == []
+    dragged = rolled.copy()  # 2 mm per frame at 50 fps
+    dragged[:, 0, 0, :2] += np.outer(np.arange(len(dragged)) * 0.002, [fwd[1], -fwd[0]])
+    out = ground(replace(ctx, kin=replace(ctx.kin, corners=dragged)))
+    assert not out["ok"] and out["slipping"][0]["point"] == "outer toe corner"
+    assert out["slipping"][0]["speed_m_s"] == pytest.approx(0.1, rel=0.01)

@@ -11,7 +11,7 @@ from motion2robot.validate import examples
 from motion2robot.validate.context import prepare
 from motion2robot.validate.models import physics_model
 from motion2robot.validate.options import CheckOptions
-from motion2robot.validate.rollout import goals, play, rollout
+from motion2robot.validate.rollout import play, rollout, servo_calibration
 
 
 @pytest.fixture(scope="module")
@@ -19,14 +19,27 @@ def op3():
     return load_robot("op3")
 
 
-def test_goals_interpolate_clip_and_rate_limit():
-    ref = np.array([[0.0], [1.0], [1.0]])  # a 1 rad jump in one 0.1 s frame
-    g = goals(ref, fps=10.0, dt=0.01, vmax=np.array([5.0]), lower=np.array([-2.0]), upper=np.array([0.8]), settle_steps=3)
-    assert g.shape == (3 + 21, 1)
-    assert (g[:3] == 0).all()
-    steps = np.diff(g[:, 0])
-    assert steps.max() <= 5.0 * 0.01 + 1e-12  # never faster than the servo
-    assert g[-1, 0] == pytest.approx(0.8)  # clipped to the range
+def test_playback_goals_are_the_guards_ticks(op3):
+    """The servos get whole ticks inside the limits, at most the velocity limit's step per tick
+    apart, settling on the first frame before the motion (a 1 rad jump of the left elbow in one
+    frame is spread over ticks, and clipped to its range)."""
+    q = examples.standing(op3, seconds=1.0).qpos.copy()
+    j = op3.joint_index("l_el")
+    q[25:, 7 + j] = op3.upper[j] + 0.5
+    ctx = prepare(RobotMotion(q, 50.0, op3.joint_names, "op3"), op3, CheckOptions(stream_rate=100.0))
+    pb = play(ctx)
+    cal = servo_calibration(op3)
+    order = [op3.joint_index(n) for n in cal.joints]
+    ticks = cal.ticks_float(pb.goals[:, order])
+    np.testing.assert_allclose(ticks, np.rint(ticks), atol=1e-6)
+    assert (pb.goals <= np.asarray(op3.upper) + 1e-9).all() and (pb.goals >= np.asarray(op3.lower) - 1e-9).all()
+    step = np.abs(np.diff(pb.goals[:, j]))
+    tick = 1 / cal.ticks_per_rad  # the guard may round a step up by one tick
+    assert 0.4 * op3.velocity_limit[j] / 100.0 < step.max() <= op3.velocity_limit[j] / 100.0 + tick + 1e-9
+    assert pb.goal_rate == 100.0 and pb.goal_ticks == round(0.5 * 100) + 1  # settle 0.5 s, one ramp-in tick
+    np.testing.assert_allclose(pb.goals[: pb.goal_ticks, j], q[0, 7 + j], atol=tick)
+    assert pb.goals[-1, j] == pytest.approx(op3.upper[j], abs=tick)
+    assert len(pb.goals) == pb.goal_ticks + 99  # 0.98 s of motion at 100 Hz: ticks 0..98
 
 
 def test_physics_model_has_servo_actuators(op3):

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.lib import format as npformat
 
 from motion2robot.errors import UserError
+from motion2robot.util.files import special_file
 
 #: Extensions picked up when a folder is expanded.
 MOTION_EXTENSIONS = (".npy", ".npz", ".bvh", ".pt", ".pth", ".pkl", ".amc")
@@ -132,10 +133,12 @@ def _read_manifest(path: Path) -> list[Path]:
 def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> Iterable[tuple[Path, bool]]:
     """Yield (file, named_explicitly) in order."""
     for p in inputs:
-        if p.is_dir():
-            for f in sorted(q for q in p.rglob("*") if q.is_file()):
-                if f.suffix.lower() in MOTION_EXTENSIONS:
-                    yield f, False
+        if p.is_dir() and p.suffix.lower() not in MOTION_EXTENSIONS:
+            # regular files, and anything else named like a motion (FIFO, device, broken link,
+            # a directory x.npy): those become error rows instead of vanishing
+            for f in sorted(q for q in p.rglob("*") if q.suffix.lower() in MOTION_EXTENSIONS
+                            and (q.is_file() or special_file(q) is not None)):
+                yield f, False
         elif p.suffix.lower() in MANIFEST_EXTENSIONS:
             if not p.is_file():
                 raise UserError(f"{p}: manifest not found; check the path")
@@ -169,6 +172,9 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
             continue
         seen.add(path)
         try:
+            special = special_file(f)
+            if special is not None:
+                raise UserError(f"{f}: {special}, not a motion file; remove it or give a regular file")
             if not f.is_file():
                 raise UserError(f"{f}: no such file; fix the manifest entry")
             try:

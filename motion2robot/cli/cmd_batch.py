@@ -34,8 +34,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    from motion2robot.cli.check_options import add_check_options
     from motion2robot.cli.read_options import add_read_options
+    from motion2robot.cli.retarget_options import add_retarget_options
 
+    add_retarget_options(p)
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -43,7 +47,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
     from motion2robot.cli.read_options import read_args_kwargs
     from motion2robot.errors import UserError
     from motion2robot.robot import load_robot
@@ -56,8 +59,20 @@ def run(args: argparse.Namespace) -> int:
         from motion2robot.batch.ray_backend import import_ray
 
         import_ray()
+    from motion2robot.batch.results import batch_lock
+    from motion2robot.util.output import output_path
+
+    output_path(args.out, "results file")
     robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
     read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    with batch_lock(args.out):  # before the plan reads or --redo rewrites the results file
+        return _run_locked(args, robot, read_options, tqdm)
+
+
+def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
+    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+    from motion2robot.cli.check_options import check_option_kwargs
+
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
                       read_options=read_options, robot=robot.name)
     exp = plan.expansion
@@ -73,8 +88,12 @@ def run(args: argparse.Namespace) -> int:
     if plan.bad_lines:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
+    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
+    if args.tempo_cap is not None:
+        retarget += (("tempo_cap", args.tempo_cap),)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())))
+                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
+                         check_options=tuple(sorted(check_option_kwargs(args).items())))
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:

@@ -19,6 +19,7 @@ from motion2robot.motion.checks import fail
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header, restricted_load
+from motion2robot.util.files import special_file
 
 FORMATS = ("humanml3d_joints", "humanml3d_vecs", "kit_vecs", "mdm_results", "mdm_array", "bvh",
            "npz", "pt", "amass", "aistpp_smpl", "asf_amc")
@@ -54,9 +55,16 @@ def _format_of_shape(path: Path, shape: tuple[int, ...], dtype: np.dtype) -> str
                      "(T, 263) features or MDM (N, 22, 3, T))", "check the array, or pass --format")
 
 
+def _refuse_special(path: Path) -> None:
+    what = special_file(path)
+    if what is not None and what != "is a directory":
+        raise fail(path, f"{what}, not a motion file", "give a regular motion file")
+
+
 def detect_format(path: str | Path) -> str:
     """Format name of a file or folder, from its extension, then shape / content."""
     path = Path(path)
+    _refuse_special(path)
     if path.is_dir():
         files = _folder_files(path)
         return detect_format(files[0])
@@ -196,7 +204,8 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
     if format is not None and format not in FORMATS:
         raise fail(path, f"unknown --format {format!r}", f"use one of {', '.join(FORMATS)}")
     opts = ReadOptions(clip, fps, mean, std, units, up, name_map)
-    fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
+    _refuse_special(path)  # a FIFO would block the open below for ever
+    fast = _read_npy_once(path, format, opts)  # a .npy file: one open
     if fast is not None:
         return fast
     if path.is_dir():

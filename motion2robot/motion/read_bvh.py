@@ -52,7 +52,7 @@ def read_bvh(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     """One clip per BVH file (``clip`` may only be 0)."""
     if opts.clip not in (None, 0, -1):
         raise fail(path, f"holds one clip, --clip {opts.clip} is out of range", "pass --clip 0 or omit it")
-    clip = parse_bvh(path)
+    clip = parse_bvh(path, strict=bool(getattr(opts, "strict", False)))
     names = list(clip.skeleton.names)
     preset, mapping = choose_map(path, names, _user_map(opts))
     joints = forward_kinematics(clip, {n for parts in mapping.values() for n in parts})

@@ -26,7 +26,7 @@ def frame_list(mask: np.ndarray) -> list[int]:
     mask = np.asarray(mask, dtype=bool)
     if mask.ndim > 1:
         mask = mask.reshape(mask.shape[0], -1).any(axis=1)
-    return [int(i) for i in np.flatnonzero(mask)]
+    return np.flatnonzero(mask).tolist()
 
 
 def first_time(frames: list[int], fps: float) -> float | None:

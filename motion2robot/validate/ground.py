@@ -1,14 +1,22 @@
-"""The floor: geoms (and sole corners) below it, and feet skating on it.
+"""The floor: geoms (and sole corners) below it, planted soles that slip or twist, swing feet
+that skim it, as hardware would feel them.
 
 - penetration: any robot geom deeper than ``ground_depth`` into the floor (from the contacts of
   the check model), or a sole corner lower than ``-ground_depth`` (a foot's geoms and its sole
   corners are reported together as "left foot" / "right foot");
-- skating: a foot in contact moving horizontally faster than ``skate_speed`` for at least
-  ``min_run`` frames. "In contact" is the motion's contact label (retargeted motions carry the
-  labels they were solved with) AND a sole corner within ``contact_height`` of the floor; without
-  labels, any corner that low counts. A swing foot passing low over the floor without a contact
-  label is not skating: it is reported as ``low_swing_frames`` (a scuff risk, figures only);
+- slipping: a point of a sole's edges (:mod:`~motion2robot.validate.sole`: corners and edge
+  points) lower than ``touch_height`` in two consecutive frames is planted; if it moves
+  horizontally faster than ``slip_speed`` between them, the sole slips. The fastest point
+  decides, so a sole twisting about its pinned centre fails at its corners. Each slip is
+  worded as a twist when the sole's rotation (yaw rate times the corners' distance from the
+  centre) moves its points more than the centre moves, as a slide otherwise. Geometry decides,
+  not the motion's contact labels: the floor does not read them;
+- skimming: a foot with no planted point between two frames (a swing foot, lifting off or
+  touching down included) whose edge points stay within ``swing_clearance`` of the floor in both
+  frames while moving horizontally faster than ``slip_speed``: a foot that scuffs on hardware;
 - non-foot contacts (figures only): bodies other than the feet touching the floor.
+
+Runs of violating frames shorter than ``min_run`` are ignored. Units: metres, seconds.
 """
 
 from __future__ import annotations
@@ -18,12 +26,11 @@ import numpy as np
 from motion2robot.validate.context import Context
 from motion2robot.validate.frames import frame_list, keep_runs
 from motion2robot.validate.models import body_name, floor_geom
-
-SIDES = ("left", "right")
+from motion2robot.validate.sole import SIDES, edge_motion, point_name, swing_clearance, yaw_rate
 
 
 def ground(ctx: Context) -> dict:
-    """Penetration and skating verdict, with the non-foot contacts as figures."""
+    """Penetration, slipping and skimming verdict, with the non-foot contacts as figures."""
     m, c, opts = ctx.kin.model, ctx.kin.contacts, ctx.options
     T = ctx.kin.num_frames
     floor = floor_geom(m)
@@ -56,52 +63,74 @@ def ground(ctx: Context) -> dict:
     pen_frames[c.frame[deep]] = True
     pen_frames |= corner_z.min(axis=(1, 2)) < -opts.ground_depth
 
-    speed = np.linalg.norm(ctx.kin.corner_vel[..., :2], axis=-1)  # (T, 2, 4)
-    fast_low = ctx.low & (speed > opts.skate_speed)
-    if ctx.labels is None:
-        in_contact = fast_low
-    else:
-        # While labelled in contact, the speed is measured between contact frames only: the
-        # central difference at a touchdown or lift-off frame mixes in the swing.
-        speed = np.where(ctx.labels[:, :, None], _contact_speed(ctx.kin.corners, ctx.labels, ctx.motion.fps), speed)
-        in_contact = ctx.low & (speed > opts.skate_speed) & ctx.labels[:, :, None]
-    sliding = keep_runs(in_contact.any(axis=2), opts.min_run)  # (T, 2)
-    low_swing = keep_runs((fast_low & ~in_contact).any(axis=2), opts.min_run)
-    if ctx.labels is not None:
-        low_swing &= ~ctx.labels
-    skating = []
-    for k, side in enumerate(SIDES):
-        if sliding[:, k].any():
-            rows = np.flatnonzero(sliding[:, k])
-            foot_speed = np.where(ctx.low[rows, k], speed[rows, k], 0.0).max(axis=1)
-            skating.append({"foot": side, "speed_m_s": round(float(foot_speed.max()), 3),
-                            "worst_frame": int(rows[np.argmax(foot_speed)]), "frames": [int(r) for r in rows]})
-
+    feet_out, feet_bad = feet_on_floor(ctx)
     touching = on_floor & (c.dist < 1e-3) & ~np.isin(body, feet)
     non_foot = [{"body": body_name(m, b), "frames": sorted({int(f) for f in c.frame[touching & (body == b)]})}
                 for b in np.unique(body[touching])]
-    bad = pen_frames | sliding.any(axis=1)
+    bad = pen_frames | feet_bad
     max_pen = max(float(-c.dist[on_floor].min()) if on_floor.any() else 0.0,
                   float(-corner_z.min()) if T else 0.0, 0.0)
     return {"ok": not bad.any(), "frames": frame_list(bad),
             "max_penetration_m": round(max_pen, 4),
-            "skating_frames": frame_list(sliding), "penetrations": pen, "skating": skating,
-            "low_swing_frames": frame_list(low_swing.any(axis=1)),
-            "non_foot_contacts": non_foot}
+            "penetrations": pen, **feet_out, "non_foot_contacts": non_foot}
 
 
-def _contact_speed(corners: np.ndarray, labels: np.ndarray, fps: float) -> np.ndarray:
-    """(T, 2, 4) horizontal corner speed (m/s) while labelled in contact: the central difference
-    over the neighbouring frames that are in contact too (one-sided at a touchdown or lift-off
-    frame, so the swing is not mixed in; 0 for a contact phase of one frame)."""
-    d = np.diff(corners[..., :2], axis=0) * fps                         # (T-1, 2, 4, 2) velocity steps
-    both = (labels[1:] & labels[:-1])[:, :, None, None]
-    d = np.where(both, d, 0.0)
-    n = both[..., 0].astype(float)                                      # (T-1, 2, 1)
-    total = np.zeros(corners.shape[:3] + (2,))
-    count = np.zeros(corners.shape[:3])
-    total[1:] += d
-    total[:-1] += d
-    count[1:] += n
-    count[:-1] += n
-    return np.linalg.norm(total, axis=-1) / np.maximum(count, 1.0)
+def feet_on_floor(ctx: Context) -> tuple[dict, np.ndarray]:
+    """Slipping planted soles and skimming swing feet (see the module docstring): their report
+    entries and figures, and the (T,) bool mask of their frames."""
+    opts, fps = ctx.options, ctx.kin.fps
+    corners = ctx.kin.corners                                           # (T, 2, 4, 3)
+    T = corners.shape[0]
+    z, speed = edge_motion(corners, fps)                                # (T, 2, P), (T-1, 2, P)
+    touch = z < opts.touch_height
+    planted = touch[:-1] & touch[1:]
+    clearance = swing_clearance(ctx.robot, opts)
+    swing = ~planted.any(axis=2, keepdims=True)
+    low = (z[:-1] < clearance) & (z[1:] < clearance)
+    slip = planted & (speed > opts.slip_speed)
+    skim = swing & low & (speed > opts.slip_speed)
+    centre = np.linalg.norm(np.diff(corners[..., :2].mean(axis=2), axis=0), axis=-1) * fps      # (T-1, 2)
+    reach = np.linalg.norm(corners[..., :2] - corners[..., :2].mean(axis=2, keepdims=True), axis=-1).max(axis=(0, 2))
+    twist = yaw_rate(corners, fps) * reach > centre                     # (T-1, 2)
+    slip_frames = keep_runs(_frames_of(slip.any(axis=2)), opts.min_run)   # (T, 2)
+    skim_frames = keep_runs(_frames_of(skim.any(axis=2)), opts.min_run)
+    slipping, skimming = [], []
+    for k, side in enumerate(SIDES):
+        for kind, sel in (("twist", twist[:, k]), ("slide", ~twist[:, k])):
+            found = _worst(slip[:, k] & sel[:, None], speed[:, k], slip_frames[:, k])
+            if found:
+                i, p, mask = found
+                slipping.append({"foot": side, "kind": kind, "speed_m_s": round(float(speed[i, k, p]), 4),
+                                 "point": point_name(side, p), "worst_frame": i + 1,
+                                 "frames": frame_list(_frames_of(mask.any(axis=1)))})
+        found = _worst(skim[:, k], speed[:, k], skim_frames[:, k])
+        if found:
+            i, p, mask = found
+            height = np.maximum(z[:-1, k], z[1:, k])[mask].min()
+            skimming.append({"foot": side, "speed_m_s": round(float(speed[i, k, p]), 4),
+                             "height_m": round(float(max(height, 0.0)), 4), "point": point_name(side, p),
+                             "worst_frame": i + 1, "frames": frame_list(_frames_of(mask.any(axis=1)))})
+    planted_speed = np.where(planted, speed, 0.0)
+    return {"slipping": slipping, "slipping_frames": frame_list(slip_frames), "skimming": skimming,
+            "skimming_frames": frame_list(skim_frames),
+            "max_slip_m_s": round(float(planted_speed.max(initial=0.0)), 4),
+            "slip_speed_m_s": opts.slip_speed, "swing_clearance_m": round(clearance, 4)}, \
+        (slip_frames | skim_frames).any(axis=1)
+
+
+def _frames_of(intervals: np.ndarray) -> np.ndarray:
+    """(T-1, ...) masks of frame-to-frame intervals -> (T, ...) masks of the frames on both ends."""
+    out = np.zeros((intervals.shape[0] + 1,) + intervals.shape[1:], dtype=bool)
+    out[:-1] |= intervals
+    out[1:] |= intervals
+    return out
+
+
+def _worst(mask: np.ndarray, speed: np.ndarray, kept: np.ndarray) -> tuple[int, int, np.ndarray] | None:
+    """Of the (T-1, P) violating intervals and points ``mask`` whose frames survive in ``kept``
+    (T,): the interval and point of the highest ``speed``, and the surviving mask."""
+    mask = mask & kept[:-1, None] & kept[1:, None]
+    if not mask.any():
+        return None
+    i, p = np.unravel_index(int(np.argmax(np.where(mask, speed, -1.0))), mask.shape)
+    return int(i), int(p), mask

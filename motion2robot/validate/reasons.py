@@ -86,9 +86,19 @@ def _ground(c: dict, fps: float) -> list[str]:
     pen = c.get("penetrations", [])
     out = [f"{human_name(v['body'])} goes {v['depth_m'] * 1000:.0f} mm below the floor {_where(v['frames'], fps)}"
            for v in pen[:MAX_PER_CHECK]] + _more(pen, "bodies below the floor")
-    out += [f"the {v['foot']} foot slides on the floor at up to {v['speed_m_s']:.2f} m/s {_where(v['frames'], fps)}"
-            for v in c.get("skating", [])]
+    for v in c.get("slipping", []):
+        what = "twists" if v["kind"] == "twist" else "slides"
+        out.append(f"{v['foot']} sole {what} {_speed(v['speed_m_s'])} at its {v['point']} {_where(v['frames'], fps)} "
+                   f"while planted (a planted sole must stay below {_speed(c.get('slip_speed_m_s', 0.0))})")
+    for v in c.get("skimming", []):
+        out.append(f"{v['foot']} foot skims the floor at {v['height_m'] * 1000:.0f} mm, moving {_speed(v['speed_m_s'])}, "
+                   f"{_where(v['frames'], fps)} (a swing foot needs {c.get('swing_clearance_m', 0.0) * 1000:.0f} mm "
+                   "of clearance: lift it)")
     return out
+
+
+def _speed(v: float) -> str:
+    return f"{v:.2f} m/s" if v >= 1.0 else f"{v * 100:.1f} cm/s"
 
 
 def _distance(metres: float) -> str:

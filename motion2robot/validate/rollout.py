@@ -1,10 +1,14 @@
-"""Physics playback: the robot on the floor, servo-like position actuators fed the trajectory.
+"""Physics playback: the robot on the floor, its servos driven exactly as ``stream`` drives them.
 
-The robot starts at the first frame's pose (at rest), holds it for ``settle_time``, then its
-actuators (see :func:`~motion2robot.validate.models.physics_model`: gain ``kp``, torque limit)
-receive the joint angles linearly interpolated at the motion's rate, each goal rate-limited per
-step to the servo's velocity limit. Every motion frame records the joint angles, the torso pose
-and the floor contacts.
+The robot starts standing at the first frame's pose (at rest) with its servos holding that pose
+for ``settle_time``; then the servos get, tick by tick at ``stream_rate``, the goals ``stream``
+would send (:mod:`~motion2robot.hardware.goals`: the motion sampled at the tick times, turned into
+servo ticks by the same :class:`~motion2robot.hardware.guard.SafetyGuard`, i.e. rounded to whole
+ticks, clipped to the joint limits and limited to the velocity limit's step per tick, after the
+guard's ramp-in), each goal held until the next tick. The targets are the planned angles, plus
+the predicted servo sag with ``sag_compensation`` (:mod:`~motion2robot.validate.sag`). The servo
+model is :func:`~motion2robot.validate.models.physics_model` (gain ``kp``, torque limit). Every
+motion frame records the joint angles, the torso pose and the floor contacts.
 
 Fall: the torso (``robot.torso_body``) drops below ``fall_height_ratio`` times the REFERENCE
 torso height at the same time, or tilts more than ``fall_tilt_deg`` away from the reference
@@ -21,13 +25,24 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from motion2robot.hardware.calibration import Calibration
+from motion2robot.hardware.goals import GoalSequence, goal_sequence
+from motion2robot.hardware.guard import SafetyGuard
+from motion2robot.hardware.limits import JointLimits
+from motion2robot.hardware.policy import TorquePolicy
+from motion2robot.robot.robot import Robot
+from motion2robot.robot.servo_map import ServoMap, ServoSpec
 from motion2robot.validate.context import Context
 from motion2robot.validate.models import body_name, floor_geom, physics_model
+from motion2robot.validate.sag import servo_targets
 
 #: Seconds simulated after a fall before the playback stops.
 AFTER_FALL = 0.5
 #: Contact events listed in the report (counts cover all of them).
 MAX_EVENTS = 40
+#: The nominal servo of robots without a servo map: 4096 ticks per turn (Dynamixel X series).
+NOMINAL_TICKS = 4096
+NOMINAL_BAUD = 1_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,7 +51,9 @@ class Playback:
     playback stopped); q (F, n) its joint angles; torso_height
     (F,) m; tilt_deg (F,) angle between simulated and reference torso z axes;
     foot_contact (F, 2) bool; other_contact (F, nbody) bool non-foot bodies on the floor;
-    realtime_factor: simulated / wall-clock seconds."""
+    realtime_factor: simulated / wall-clock seconds; goals (K, n) rad the servos were sent, one
+    row per control tick at ``goal_rate`` Hz from the start of the settling, ``joint_names`` order
+    (``goal_ticks`` of them are the settling and the guard's ramp-in, the rest play the motion)."""
 
     time: np.ndarray
     qpos: np.ndarray
@@ -47,31 +64,40 @@ class Playback:
     realtime_factor: float
     fall_frame: int | None
     fall_cause: str | None
+    goals: np.ndarray
+    goal_rate: float
+    goal_ticks: int
 
     @property
     def q(self) -> np.ndarray:
         return self.qpos[:, 7:]
 
 
-def goals(reference: np.ndarray, fps: float, dt: float, vmax: np.ndarray, lower: np.ndarray,
-          upper: np.ndarray, settle_steps: int) -> np.ndarray:
-    """Per-step actuator goals (S, n): ``settle_steps`` of frame 0, then the reference linearly
-    interpolated at the step times, clipped to the range and rate-limited to ``vmax`` (rad/s)."""
-    T = reference.shape[0]
-    steps = round((T - 1) / fps / dt) + 1
-    t = np.arange(steps) * dt * fps  # in frames
-    i0 = np.minimum(np.floor(t).astype(int), T - 1)
-    i1 = np.minimum(i0 + 1, T - 1)
-    w = (t - i0)[:, None]
-    target = np.clip((1 - w) * reference[i0] + w * reference[i1], lower, upper)
-    target = np.concatenate([np.repeat(target[:1], settle_steps, axis=0), target])
-    step = vmax * dt
-    out = np.empty_like(target)
-    cur = target[0].copy()
-    for s in range(target.shape[0]):
-        cur += np.clip(target[s] - cur, -step, step)
-        out[s] = cur
-    return out
+def servo_calibration(robot: Robot) -> Calibration:
+    """The calibration ``stream`` would use for ``robot``: its servo map (zero offsets do not
+    change the angles a goal stands for); a robot without one, or whose map leaves hinges out,
+    gets a nominal 4096-tick servo on every hinge."""
+    servos = robot.config.servos
+    if servos is None or {s.joint for s in servos.servos} != set(robot.joint_names):
+        servos = ServoMap("nominal", NOMINAL_BAUD, NOMINAL_TICKS, NOMINAL_TICKS // 2,
+                          tuple(ServoSpec(j, i + 1) for i, j in enumerate(robot.joint_names)))
+    return Calibration.from_servo_map(servos)
+
+
+def rollout_goals(ctx: Context) -> tuple[GoalSequence, Calibration]:
+    """The goals ``stream`` would send for ``ctx.motion`` at ``options.stream_rate`` (the servos
+    standing at its first frame, default torque policy's ramp speed), with the targets of
+    :func:`~motion2robot.validate.sag.servo_targets` (sag-compensated with
+    ``options.sag_compensation``), and the calibration that turns them into radians."""
+    robot, opts = ctx.robot, ctx.options
+    cal = servo_calibration(robot)
+    guard = SafetyGuard(JointLimits.from_robot(robot).select(cal.joints), cal, opts.stream_rate,
+                        TorquePolicy().ramp_speed)
+    order = [robot.joint_index(j) for j in cal.joints]
+    traj = servo_targets(ctx, opts.sag_compensation)[:, order]
+    lo, hi = np.asarray(robot.lower)[order], np.asarray(robot.upper)[order]
+    present = np.rint(cal.ticks_float(np.clip(ctx.kin.qpos[0, 7:][order], lo, hi)))
+    return goal_sequence(guard, traj, ctx.kin.fps, opts.stream_rate, present), cal
 
 
 def play(ctx: Context) -> Playback:
@@ -80,12 +106,17 @@ def play(ctx: Context) -> Playback:
     m = physics_model(robot, opts.timestep)
     d = mujoco.MjData(m)
     dt = m.opt.timestep
-    ref = kin.qpos[:, 7:]
-    settle = round(opts.settle_time / dt)
-    ctrl = goals(ref, kin.fps, dt, np.asarray(robot.velocity_limit), np.asarray(robot.lower),
-                 np.asarray(robot.upper), settle)
-    per_frame = 1.0 / (kin.fps * dt)
-    record_at = (settle + np.round(np.arange(kin.num_frames) * per_frame).astype(int)).tolist() + [-1]
+    seq, cal = rollout_goals(ctx)
+    settle = round(opts.settle_time * opts.stream_rate)
+    ticks = np.concatenate([np.repeat(seq.start[None], settle, axis=0), seq.ticks])
+    ctrl_ticks = np.empty((ticks.shape[0], robot.n_joints))
+    ctrl_ticks[:, [robot.joint_index(j) for j in cal.joints]] = cal.to_radians(ticks)
+    steps = int(np.ceil(ticks.shape[0] / opts.stream_rate / dt - 1e-9))
+    tick_of_step = np.minimum((np.arange(steps) * dt * opts.stream_rate + 1e-9).astype(int), ticks.shape[0] - 1)
+    ctrl = ctrl_ticks[tick_of_step]
+    play_start = (settle + seq.ramp.shape[0]) / opts.stream_rate  # s of simulated time at play tick 0
+    record_at = np.round((play_start + np.arange(kin.num_frames) / kin.fps) / dt).astype(int)
+    record_at = np.minimum(record_at, steps - 1).tolist() + [-1]
     d.qpos[:] = kin.qpos[0]
     mujoco.mj_forward(m, d)
 
@@ -136,7 +167,8 @@ def play(ctx: Context) -> Playback:
     return Playback(time=np.arange(F) / kin.fps, qpos=qpos, torso_height=height, tilt_deg=tilt,
                     foot_contact=foot_contact, other_contact=other,
                     realtime_factor=sim_time / wall if wall > 0 else float("inf"),
-                    fall_frame=fall_frame, fall_cause=cause)
+                    fall_frame=fall_frame, fall_cause=cause, goals=ctrl_ticks, goal_rate=float(opts.stream_rate),
+                    goal_ticks=settle + seq.ramp.shape[0])
 
 
 def contact_events(pb: Playback, ctx: Context) -> list[dict]:
@@ -180,5 +212,6 @@ def rollout(ctx: Context, pb: Playback | None = None) -> dict:
         "root_drift_max_m": round(float(drift.max()), 4) if drift.size else 0.0,
         "contact_events": events[:MAX_EVENTS], "n_contact_events": len(events),
         "n_floor_contacts_other": sum(e["event"] == "floor contact" for e in events),
-        "timestep_s": ctx.options.timestep, "realtime_factor": round(pb.realtime_factor, 1),
+        "timestep_s": ctx.options.timestep, "stream_rate_hz": ctx.options.stream_rate,
+        "sag_compensation": ctx.options.sag_compensation, "realtime_factor": round(pb.realtime_factor, 1),
     }

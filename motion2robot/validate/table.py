@@ -24,7 +24,9 @@ def _figure(name: str, c: dict) -> str:
     if name == "self_collision":
         return f"deepest {g('max_depth_m', 0) * 1000:.1f} mm"
     if name == "ground":
-        return f"penetration {g('max_penetration_m', 0) * 1000:.1f} mm, skating {len(g('skating_frames', []))} frames"
+        return (f"penetration {g('max_penetration_m', 0) * 1000:.1f} mm, planted soles up to "
+                f"{g('max_slip_m_s', 0) * 100:.1f} cm/s, slipping {len(g('slipping_frames', []))} frames, "
+                f"skimming {len(g('skimming_frames', []))} frames")
     if name == "balance":
         zm, cm = g("min_zmp_margin_m"), g("min_com_margin_m")
         s = "ZMP margin " + ("n/a" if zm is None else f"{zm * 1000:+.0f} mm")
@@ -61,6 +63,12 @@ def verdict_table(report: FeasibilityReport) -> str:
     if report.reasons:
         out.append("")
         out += [f"- {s}" for s in report.reasons]
+    f = report.figures
+    if f.get("tempo") is not None:
+        out.append("")
+        out.append(f"tempo x{f['tempo']:.2f}" + (f": {f['tempo_reason']}" if f.get("tempo_reason") else ""))
+        if f.get("fallback"):
+            out.append(f"legs: {f['fallback']['mode']}, {f['fallback']['why']} ({f['fallback'].get('what', '')})")
     out.append("")
     out.append("FEASIBLE" if report.feasible else f"INFEASIBLE ({', '.join(report.failed)})")
     return "\n".join(out)

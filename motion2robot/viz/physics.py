@@ -1,16 +1,14 @@
 """The physics rollout as full robot poses (root + hinges per motion frame), for playing it back.
 
 Prefers the rollout recorded by the feasibility checks (``report.series["rollout_qpos"]``,
-(T, 7 + n)); otherwise runs the same playback from the checks' building blocks
-(:func:`motion2robot.validate.models.physics_model`, :func:`motion2robot.validate.rollout.goals`):
-servo-like position actuators fed the motion, starting at rest on frame 0 after the settle time.
+(T, 7 + n)); otherwise runs that playback (:func:`motion2robot.validate.rollout.play`: the
+servos get the goals ``stream`` would send, starting at rest on frame 0 after the settle time).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from motion2robot.robot.robot import Robot
@@ -39,28 +37,11 @@ def rollout_qpos(motion: RobotMotion, robot: Robot, report: Any = None) -> np.nd
 
 
 def simulate(motion: RobotMotion, robot: Robot) -> np.ndarray:
-    """Run the checks' physics playback and record the full pose at each motion frame."""
-    from motion2robot.validate.models import physics_model
+    """Run the checks' physics playback (servos driven as ``stream`` drives them, default check
+    options) and return the full pose at each motion frame; frames after the playback stopped
+    (a fall) repeat the last recorded pose."""
+    from motion2robot.validate.context import prepare
     from motion2robot.validate.options import CheckOptions
-    from motion2robot.validate.rollout import goals
+    from motion2robot.validate.rollout import play
 
-    opts = CheckOptions()
-    m = physics_model(robot, opts.timestep)
-    d = mujoco.MjData(m)
-    dt = m.opt.timestep
-    settle = int(round(opts.settle_time / dt))
-    ctrl = goals(motion.joints, motion.fps, dt, np.asarray(robot.velocity_limit), np.asarray(robot.lower),
-                 np.asarray(robot.upper), settle)
-    record_at = settle + np.round(np.arange(motion.num_frames) / (motion.fps * dt)).astype(int)
-    d.qpos[:] = motion.qpos[0]
-    mujoco.mj_forward(m, d)
-    out = np.empty_like(motion.qpos)
-    f = 0
-    for s in range(ctrl.shape[0]):
-        while f < motion.num_frames and record_at[f] == s:
-            out[f] = d.qpos
-            f += 1
-        d.ctrl[:] = ctrl[s]
-        mujoco.mj_step(m, d)
-    out[f:] = d.qpos
-    return out
+    return _fill_nan_rows(play(prepare(motion, robot, CheckOptions())).qpos)
