@@ -26,13 +26,14 @@ import numpy as np
 from numpy.lib import format as npformat
 
 from motion2robot.errors import UserError
+from motion2robot.motion.formats import SCAN_SUFFIXES, SINGLE_CLIP_SUFFIXES
 
-#: Extensions picked up when a folder is expanded.
-MOTION_EXTENSIONS = (".npy", ".npz", ".bvh", ".pt", ".pth", ".pkl", ".amc")
+#: Extensions picked up when a folder is expanded (the format table's).
+MOTION_EXTENSIONS = SCAN_SUFFIXES
 #: Extensions read as manifests (one path per line).
 MANIFEST_EXTENSIONS = (".txt", ".lst")
-#: Formats that hold exactly one clip per file.
-_SINGLE_CLIP = (".bvh", ".pkl", ".amc")
+#: Extensions whose every format holds exactly one clip per file.
+_SINGLE_CLIP = SINGLE_CLIP_SUFFIXES
 #: Last axis sizes of HumanML3D / KIT feature vectors.
 _FEATURE_DIMS = (263, 251)
 

@@ -15,7 +15,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Read a motion file (or folder) as the pipeline does and describe each clip: "
                     "detected format, frames, fps, duration, subject height, up-axis decision, "
                     "foot contacts and text prompt.")
-    p.add_argument("file", help="motion file or folder (.npy, .npz, .bvh, .pt, MDM results.npy)")
+    from motion2robot.motion.formats import SCAN_SUFFIXES
+
+    p.add_argument("file", help=f"motion file or folder ({' '.join(SCAN_SUFFIXES)}; see --format)")
     p.add_argument("--clip", type=int, help="only this clip index")
     p.add_argument("--plot", metavar="OUT.png", help="draw the skeleton at a few frames and the root path")
     add_read_options(p)

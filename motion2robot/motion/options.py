@@ -11,7 +11,8 @@ from typing import Mapping
 class ReadOptions:
     """clip: index of the one clip to keep; fps: override the file's frame rate; mean/std: feature
     statistics files (.npy) for normalised 263-d input; units: "m"|"cm"|"mm"|"inch"|"cmu";
-    up: "x"|"y"|"z" (or "-y" ...); name_map: TOML file or {keypoint: spec} for BVH skeletons."""
+    up: "x"|"y"|"z" (or "-y" ...); name_map: TOML file or {keypoint: spec} for BVH skeletons;
+    skeleton: the ASF file of an AMC take."""
 
     clip: int | None = None
     fps: float | None = None
@@ -20,3 +21,4 @@ class ReadOptions:
     units: str | None = None
     up: str | None = None
     name_map: str | Path | Mapping[str, str] | None = None
+    skeleton: str | Path | None = None
