@@ -41,8 +41,8 @@ def describe(m, index: int, total: int) -> str:
         f"  units       {meta.get('units')} ({meta.get('units_source')})",
         f"  contacts    left {left:.0f} %, right {right:.0f} % of frames ({mc.meta['contacts_source']})",
     ]
-    for key, label in (("skeleton", "skeleton"), ("features", "features"), ("dropped", "dropped"),
-                       ("note", "note")):
+    for key, label in (("skeleton", "skeleton"), ("joint_map", "mapping"), ("features", "features"),
+                       ("dropped", "dropped"), ("note", "note")):
         if meta.get(key) is not None:
             lines.append(f"  {label:<11} {meta[key]}")
     if meta.get("prompt"):
