@@ -34,8 +34,8 @@ MOTION_EXTENSIONS = SCAN_SUFFIXES
 MANIFEST_EXTENSIONS = (".txt", ".lst")
 #: Extensions whose every format holds exactly one clip per file.
 _SINGLE_CLIP = SINGLE_CLIP_SUFFIXES
-#: Last axis sizes of HumanML3D / KIT feature vectors.
-_FEATURE_DIMS = (263, 251)
+#: Last axis sizes of per-frame feature vectors (HumanML3D, KIT, MotionFix 207-d, SMPL-H 135).
+_FEATURE_DIMS = (263, 251, 207, 135)
 
 
 @dataclass(frozen=True)

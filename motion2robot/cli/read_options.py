@@ -19,6 +19,8 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
                    help="override the frame rate the file declares (e.g. 20 for IK-made BVH files that say 24)")
     p.add_argument("--mean", help="Mean.npy for normalised features" + used_by("mean"))
     p.add_argument("--std", help="Std.npy for normalised features" + used_by("std"))
+    p.add_argument("--stats", metavar="STATS",
+                   help="statistics file (pickled mean/std dict) of normalised features" + used_by("stats"))
     p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")
     p.add_argument("--up", choices=["x", "y", "z", "-x", "-y", "-z"], help="override up-axis detection")
     p.add_argument("--name-map", dest="name_map",
@@ -29,4 +31,5 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
 
 
 def read_args_kwargs(args: argparse.Namespace) -> dict:
-    return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton")}
+    return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton",
+                                          "stats")}

@@ -79,6 +79,8 @@ TABLE: tuple[Format, ...] = (
            _npy_last(263), f"{_A}:read_features", npy=True, options=("mean", "std")),
     Format("kit_vecs", "KIT-ML 251-d feature vectors (refused: no SMPL22 map for KIT)", (".npy",),
            _npy_last(251), f"{_A}:read_features", npy=True, options=("mean", "std")),
+    Format("motionfix_207", "MotionFix/OmniME 207-d features (T,207), z up, 30 fps, raw or normalised", (".npy",),
+           _npy_last(207), "motion2robot.motion.motionfix:read_motionfix", npy=True, options=("stats",)),
     Format("mdm_array", "bare MDM-layout array (N,22,3,T)", (".npy",),
            _mdm_array, f"{_A}:read_mdm_array", npy=True, options=("mean", "std")),
     Format("humanml3d_joints", "HumanML3D joint positions (T,22,3) or a batch (N,T,22,3)", (".npy",),

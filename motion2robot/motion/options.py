@@ -12,7 +12,8 @@ class ReadOptions:
     """clip: index of the one clip to keep; fps: override the file's frame rate; mean/std: feature
     statistics files (.npy) for normalised 263-d input; units: "m"|"cm"|"mm"|"inch"|"cmu";
     up: "x"|"y"|"z" (or "-y" ...); name_map: TOML file or {keypoint: spec} for BVH skeletons;
-    skeleton: the ASF file of an AMC take."""
+    skeleton: the ASF file of an AMC take; stats: a model's statistics file (pickled mean/std dict)
+    for normalised MotionFix/OmniME 207-d features."""
 
     clip: int | None = None
     fps: float | None = None
@@ -22,3 +23,4 @@ class ReadOptions:
     up: str | None = None
     name_map: str | Path | Mapping[str, str] | None = None
     skeleton: str | Path | None = None
+    stats: str | Path | None = None

@@ -134,20 +134,21 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
                 fps: float | None = None, mean: str | Path | None = None, std: str | Path | None = None,
                 units: str | None = None, up: str | None = None,
                 name_map: str | Path | Mapping[str, Any] | None = None,
-                skeleton: str | Path | None = None) -> list[HumanMotion]:
+                skeleton: str | Path | None = None, stats: str | Path | None = None) -> list[HumanMotion]:
     """Read a motion file (or a folder of clips) into canonical clips, one per clip.
 
     format: override detection (see :data:`FORMATS`); clip: keep only that clip index (for a
     folder: that file); fps: override the file's rate; mean/std: statistics for normalised
     features; units ("m", "cm", "mm", "inch", "cmu") and up ("x", "y", "z") override
     detection; name_map: TOML path or {keypoint: joint spec} for BVH skeletons; skeleton: the
-    ASF file of an AMC motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc).
+    ASF file of an AMC motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc); stats:
+    statistics file of normalised MotionFix/OmniME 207-d features.
     Raises :class:`~motion2robot.errors.InputFileError` with a one-line message on bad input.
     """
     path = Path(path)
     if format is not None and format not in FORMATS:
         raise fail(path, f"unknown --format {format!r}", f"use one of {', '.join(FORMATS)}")
-    opts = ReadOptions(clip, fps, mean, std, units, up, name_map, skeleton)
+    opts = ReadOptions(clip, fps, mean, std, units, up, name_map, skeleton, stats=stats)
     fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
     if fast is not None:
         return fast
