@@ -2,7 +2,9 @@
 
 An INPUT is
 - a motion file (any extension; named explicitly, it is always tried);
-- a folder: every file below it (recursively, sorted) whose extension is in :data:`MOTION_EXTENSIONS`.
+- a folder: every file below it (recursively, sorted) whose extension is in :data:`MOTION_EXTENSIONS`;
+  a generator's extra copies of one motion (MoMask's joints/_ik/BVH quartet) are skipped, see
+  :mod:`~motion2robot.batch.layouts`.
   ``.npy`` files holding a 1-D array (a data set's ``Mean.npy`` / ``Std.npy`` feature statistics)
   are not motions and are *skipped* (listed in :attr:`Expansion.skipped`), not turned into error rows;
 - a manifest (``.txt`` / ``.lst``): one path per line, relative to the manifest's folder; blank lines
@@ -25,6 +27,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 from numpy.lib import format as npformat
 
+from motion2robot.batch.layouts import duplicate_outputs
 from motion2robot.errors import UserError
 from motion2robot.motion.formats import SCAN_SUFFIXES, SINGLE_CLIP_SUFFIXES
 
@@ -80,6 +83,8 @@ def _npy_header(path: Path) -> tuple[tuple[int, ...], np.dtype]:
 def _count_array(shape: tuple[int, ...]) -> int:
     """Clips in a plain array: (N, T, 22, 3) / (N, 22, 3, T) / (N, 263, 1, T) batches have N,
     (N, T, 263) feature batches have N, everything else one."""
+    if len(shape) == 5:  # MLD "all in one": samples x repetitions
+        return int(shape[0]) * int(shape[1])
     if len(shape) == 4:
         return int(shape[0])
     if len(shape) == 3 and shape[-1] in _FEATURE_DIMS:
@@ -130,13 +135,15 @@ def _read_manifest(path: Path) -> list[Path]:
     return out
 
 
-def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> Iterable[tuple[Path, bool]]:
-    """Yield (file, named_explicitly) in order."""
+def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]
+          ) -> Iterable[tuple[Path, bool, str | None]]:
+    """Yield (file, named_explicitly, why it is skipped or None) in order."""
     for p in inputs:
         if p.is_dir():
-            for f in sorted(q for q in p.rglob("*") if q.is_file()):
-                if f.suffix.lower() in MOTION_EXTENSIONS:
-                    yield f, False
+            found = sorted(q for q in p.rglob("*") if q.is_file() and q.suffix.lower() in MOTION_EXTENSIONS)
+            copies = duplicate_outputs(found)
+            for f in found:
+                yield f, False, copies.get(f)
         elif p.suffix.lower() in MANIFEST_EXTENSIONS:
             if not p.is_file():
                 raise UserError(f"{p}: manifest not found; check the path")
@@ -145,7 +152,7 @@ def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> 
                 raise UserError(f"{p}: manifest lists itself (directly or through another); remove the loop")
             yield from _walk(_read_manifest(p), True, seen_manifests | {real})
         else:
-            yield p, explicit
+            yield p, explicit, None
 
 
 def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] | None = None) -> Expansion:
@@ -164,11 +171,14 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
     skipped: list[tuple[str, str]] = []
     errors: dict[str, str] = {}
     seen: set[str] = set()
-    for f, explicit in _walk([Path(p).expanduser() for p in inputs], True, set()):
+    for f, explicit, why in _walk([Path(p).expanduser() for p in inputs], True, set()):
         path = str(f.resolve())
         if path in seen:
             continue
         seen.add(path)
+        if why is not None:
+            skipped.append((path, why))
+            continue
         try:
             if not f.is_file():
                 raise UserError(f"{f}: no such file; fix the manifest entry")

@@ -63,9 +63,13 @@ def run(args: argparse.Namespace) -> int:
     exp = plan.expansion
     files = len({i.path for i in exp.items})
     note = [f"{len(exp.items)} clips in {files} files"]
-    if exp.skipped:
-        names = ", ".join(os.path.basename(p) for p, _ in exp.skipped[:4])
-        note.append(f"{len(exp.skipped)} non-motion files skipped ({names})")
+    copies = [p for p, why in exp.skipped if why.startswith("MoMask copy")]
+    other = [p for p, why in exp.skipped if not why.startswith("MoMask copy")]
+    if copies:
+        note.append(f"{len(copies)} MoMask copies of the same samples skipped (joints/*_ik.npy kept)")
+    if other:
+        names = ", ".join(os.path.basename(p) for p in other[:4])
+        note.append(f"{len(other)} non-motion files skipped ({names})")
     if plan.done:
         note.append(f"{plan.done} already in {args.out} (resume; --redo to redo)")
     if plan.dropped:

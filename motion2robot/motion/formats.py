@@ -54,7 +54,7 @@ def _npy_last(*dims: int) -> Callable[[Probe], bool]:
 
 def _npy_joints(p: Probe) -> bool:
     s = p.npy_shape if p.is_npy and not p.npy_dtype.hasobject else ()
-    return (len(s) == 3 and s[1] in (22, 24, 52) and s[2] == 3) or (len(s) == 4 and s[2] in (22, 24, 52) and s[3] == 3)
+    return len(s) in (3, 4, 5) and s[-2] in (22, 24, 52) and s[-1] == 3
 
 
 def _mdm_array(p: Probe) -> bool:
@@ -83,7 +83,8 @@ TABLE: tuple[Format, ...] = (
            _npy_last(207), "motion2robot.motion.motionfix:read_motionfix", npy=True, options=("stats",)),
     Format("mdm_array", "bare MDM-layout array (N,22,3,T)", (".npy",),
            _mdm_array, f"{_A}:read_mdm_array", npy=True, options=("mean", "std")),
-    Format("humanml3d_joints", "HumanML3D joint positions (T,22,3) or a batch (N,T,22,3)", (".npy",),
+    Format("humanml3d_joints", "HumanML3D joint positions (T,22,3), a batch (N,T,22,3) or MLD's "
+           "(samples,repetitions,T,22,3); a .txt beside it is the prompt", (".npy",),
            _npy_joints, f"{_A}:read_joints", npy=True),
     Format("pt", "torch .pt/.pth tensor (needs motion2robot[torch])", (".pt", ".pth"),
            lambda p: (p.is_zip and (p.zip_has_suffix("data.pkl") or p.suffix == ".pt"))
