@@ -27,3 +27,8 @@ class RobotConfigError(UserError):
 
 class SolverError(UserError):
     """The retargeting problem cannot be posed for this motion/robot (not a numerical failure)."""
+
+
+class InputWarning(UserWarning):
+    """Input was read, but with an assumption the user should know (one line, shown by the CLI as
+    ``motion2robot: warning: ...``)."""

@@ -22,7 +22,7 @@ def test_every_format_has_an_importable_reader_and_a_summary() -> None:
 
 def test_batch_scans_the_table_suffixes_and_counts_single_clip_files() -> None:
     assert MOTION_EXTENSIONS == SCAN_SUFFIXES
-    assert set(SINGLE_CLIP_SUFFIXES) == {".bvh", ".amc", ".pkl"}  # .npy/.npz can hold batches
+    assert set(SINGLE_CLIP_SUFFIXES) == {".bvh", ".amc"}  # .npy/.npz hold batches, a .pkl an edit triple
 
 
 def test_cli_help_lists_every_format_and_the_options_they_take() -> None:

@@ -108,10 +108,20 @@ def count_clips(path: Path, read_options: Mapping[str, Any] | None = None) -> in
                 obj = obj.item()
             if isinstance(obj, dict) and isinstance(obj.get("motion"), np.ndarray):
                 return int(obj["motion"].shape[0]) if obj["motion"].ndim == 4 else 1
+            if isinstance(obj, dict) and "pose" in obj:  # an editor's result: edited, source, target
+                return sum(k in obj for k in ("pose", "pose_source", "pose_target"))
             return 1  # let the reader explain what is wrong with it
         if len(shape) <= 1:
             return None
         return _count_array(shape)
+    if ext == ".pkl":
+        from motion2robot.motion.safe_pickle import restricted_load
+
+        with open(path, "rb") as fh:
+            obj = restricted_load(path, fh)
+        if isinstance(obj, dict) and "pose" in obj:  # an editor's result: edited, source, target
+            return sum(k in obj for k in ("pose", "pose_source", "pose_target"))
+        return 1
     if ext == ".npz":
         with np.load(path, allow_pickle=False) as z:
             key = next((k for k in ("joints", "positions") if k in z.files), None)

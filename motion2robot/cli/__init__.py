@@ -14,9 +14,20 @@ import importlib
 import pkgutil
 import sys
 import traceback
+import warnings
 
 from motion2robot import __version__
-from motion2robot.errors import UserError
+from motion2robot.errors import InputWarning, UserError
+
+_default_showwarning = warnings.showwarning
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+    """Input warnings as one line ``motion2robot: warning: ...``; others as Python prints them."""
+    if issubclass(category, InputWarning):
+        print(f"motion2robot: warning: {message}", file=sys.stderr)
+    else:
+        _default_showwarning(message, category, filename, lineno, file, line)
 
 #: Order in which subcommands appear in ``--help`` (others follow alphabetically).
 _ORDER = ["demo", "robots", "inspect", "retarget", "check", "sim", "stream", "servos", "batch", "batch-report"]
@@ -49,6 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the process exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
+    warnings.showwarning = _show_warning
     try:
         from motion2robot.viz.gl import import_mujoco
 

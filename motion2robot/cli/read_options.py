@@ -21,6 +21,11 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--std", help="Std.npy for normalised features" + used_by("std"))
     p.add_argument("--stats", metavar="STATS",
                    help="statistics file (pickled mean/std dict) of normalised features" + used_by("stats"))
+    p.add_argument("--body-model", dest="body_model", metavar="PATH",
+                   help="your SMPL-H/SMPL/SMPL-X model file (.npz, or .pkl of plain arrays): joints of SMPL "
+                        "parameters from its rest joints and tree" + used_by("body_model"))
+    p.add_argument("--strict", action="store_true", default=None,
+                   help="refuse SMPL parameters without --body-model instead of using the approximate skeleton")
     p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")
     p.add_argument("--up", choices=["x", "y", "z", "-x", "-y", "-z"], help="override up-axis detection")
     p.add_argument("--name-map", dest="name_map",
@@ -32,4 +37,4 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
 
 def read_args_kwargs(args: argparse.Namespace) -> dict:
     return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton",
-                                          "stats")}
+                                          "stats", "body_model", "strict")}

@@ -72,6 +72,10 @@ TABLE: tuple[Format, ...] = (
     Format("asf_amc", "CMU ASF/AMC take (the .asf skeleton beside the .amc)", (".amc",),
            lambda p: p.suffix in (".asf", ".amc"),
            "motion2robot.motion.read_asf_amc:read_asf_amc", single_clip=True, options=("skeleton",)),
+    Format("edit_result", "MotionFix/OmniME result .npy (pickled dict: pose, pose_source, pose_target (T,135), "
+           "text): clips edited, source, target", (".npy",),
+           lambda p: p.is_npy and p.npy_dtype.hasobject and "pose" in p.npy_object_keys,
+           "motion2robot.motion.read_smpl:read_edit_result", npy=True, options=("body_model", "strict")),
     Format("mdm_results", "MDM-style results.npy (pickled dict: motion (N,22,3,T), text, lengths)", (".npy",),
            lambda p: p.is_npy and p.npy_dtype.hasobject, f"{_A}:read_mdm_results", npy=True,
            options=("mean", "std")),
@@ -79,6 +83,9 @@ TABLE: tuple[Format, ...] = (
            _npy_last(263), f"{_A}:read_features", npy=True, options=("mean", "std")),
     Format("kit_vecs", "KIT-ML 251-d feature vectors (refused: no SMPL22 map for KIT)", (".npy",),
            _npy_last(251), f"{_A}:read_features", npy=True, options=("mean", "std")),
+    Format("smplh_135", "SMPL-H rotations (T,135): translation + 22 6D rotations (MotionFix/OmniME), z up, "
+           "30 fps", (".npy",), _npy_last(135), "motion2robot.motion.read_smpl:read_smplh_135", npy=True,
+           options=("body_model", "strict")),
     Format("motionfix_207", "MotionFix/OmniME 207-d features (T,207), z up, 30 fps, raw or normalised", (".npy",),
            _npy_last(207), "motion2robot.motion.motionfix:read_motionfix", npy=True, options=("stats",)),
     Format("mdm_array", "bare MDM-layout array (N,22,3,T)", (".npy",),
@@ -90,13 +97,15 @@ TABLE: tuple[Format, ...] = (
            lambda p: (p.is_zip and (p.zip_has_suffix("data.pkl") or p.suffix == ".pt"))
            or (p.suffix == ".pt" and not p.is_npy and not p.is_zip),
            "motion2robot.motion.tensors:read_pt"),
-    Format("amass", "AMASS SMPL-H parameters .npz (refused: SMPL body model needed)", (".npz",),
-           lambda p: p.is_zip and {"poses", "trans"} <= p.npz_keys,
-           "motion2robot.motion.read:read_smpl_refused"),
+    Format("amass", "AMASS SMPL-H / SMPL-X parameters .npz (poses or root_orient + pose_body, trans, betas)",
+           (".npz",), lambda p: p.is_zip and ({"poses", "trans"} <= p.npz_keys
+                                              or {"root_orient", "pose_body"} <= p.npz_keys),
+           "motion2robot.motion.read_smpl:read_amass", single_clip=True, options=("body_model", "strict")),
     Format("npz", ".npz with joints=(T,22,3) and fps", (".npz",),
            lambda p: p.is_zip, f"{_A}:read_npz"),
-    Format("aistpp_smpl", "AIST++ SMPL .pkl (refused: SMPL body model needed)", (".pkl",),
-           lambda p: p.suffix == ".pkl", "motion2robot.motion.read:read_pkl", single_clip=True),
+    Format("aistpp_smpl", "AIST++ SMPL parameters .pkl (or an editor result dict), restricted unpickler",
+           (".pkl",), lambda p: p.suffix == ".pkl", "motion2robot.motion.read_smpl:read_smpl_pkl",
+           options=("body_model", "strict")),
 )
 
 BY_NAME: dict[str, Format] = {f.name: f for f in TABLE}

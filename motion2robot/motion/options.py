@@ -13,7 +13,8 @@ class ReadOptions:
     statistics files (.npy) for normalised 263-d input; units: "m"|"cm"|"mm"|"inch"|"cmu";
     up: "x"|"y"|"z" (or "-y" ...); name_map: TOML file or {keypoint: spec} for BVH skeletons;
     skeleton: the ASF file of an AMC take; stats: a model's statistics file (pickled mean/std dict)
-    for normalised MotionFix/OmniME 207-d features."""
+    for normalised MotionFix/OmniME 207-d features; body_model: the user's SMPL/SMPL-H/SMPL-X model
+    file for SMPL parameters; strict: refuse the approximate skeleton when there is none."""
 
     clip: int | None = None
     fps: float | None = None
@@ -24,3 +25,5 @@ class ReadOptions:
     name_map: str | Path | Mapping[str, str] | None = None
     skeleton: str | Path | None = None
     stats: str | Path | None = None
+    body_model: str | Path | None = None
+    strict: bool = False

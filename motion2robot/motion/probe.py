@@ -57,6 +57,14 @@ class Probe:
         return self._npy_header[1]
 
     @cached_property
+    def npy_object_keys(self) -> frozenset[str]:
+        """Keys of the dict an object .npy holds (restricted unpickler), else empty."""
+        from motion2robot.motion.safe_pickle import load_npy
+
+        obj = load_npy(self.path)
+        return frozenset(map(str, obj)) if isinstance(obj, dict) else frozenset()
+
+    @cached_property
     def zip_names(self) -> tuple[str, ...]:
         try:
             with zipfile.ZipFile(self.path) as z:

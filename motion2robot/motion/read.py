@@ -18,11 +18,8 @@ from motion2robot.motion.formats import BY_NAME, FORMATS, SCAN_SUFFIXES, TABLE, 
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 from motion2robot.motion.probe import Probe
-from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header, restricted_load
+from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header
 
-_SMPL_REFUSAL = ("holds SMPL body-model parameters (axis-angle poses); turning them into joint "
-                 "positions needs the licence-restricted SMPL/SMPL-H model files, which are not shipped",
-                 "export joint positions (e.g. HumanML3D joints or BVH) and read those instead")
 _NPY_FORMATS = tuple(f.name for f in TABLE if f.npy)
 
 
@@ -70,21 +67,9 @@ def _folder_files(path: Path) -> list[Path]:
     return files
 
 
-def read_smpl_refused(path: Path, opts: ReadOptions) -> list[HumanMotion]:
-    raise fail(path, *_SMPL_REFUSAL)
-
-
-def read_pkl(path: Path, opts: ReadOptions) -> list[HumanMotion]:
-    with open(path, "rb") as fh:
-        obj = restricted_load(path, fh)
-    if isinstance(obj, dict) and "smpl_poses" in obj:
-        raise fail(path, *_SMPL_REFUSAL)
-    raise fail(path, f"holds a {type(obj).__name__}, not a known motion pickle", "pass --format")
-
-
 def _read_npy_content(path: Path, fmt: str, arr: Any, opts: ReadOptions) -> list[HumanMotion]:
     spec = BY_NAME[fmt]
-    if fmt != "mdm_results" and not isinstance(arr, np.ndarray):
+    if fmt not in ("mdm_results", "edit_result") and not isinstance(arr, np.ndarray):
         raise fail(path, f"holds a {type(arr).__name__}, not an array", "give a numeric .npy")
     return spec.read_function()(path, arr, opts)
 
@@ -134,7 +119,8 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
                 fps: float | None = None, mean: str | Path | None = None, std: str | Path | None = None,
                 units: str | None = None, up: str | None = None,
                 name_map: str | Path | Mapping[str, Any] | None = None,
-                skeleton: str | Path | None = None, stats: str | Path | None = None) -> list[HumanMotion]:
+                skeleton: str | Path | None = None, stats: str | Path | None = None,
+                body_model: str | Path | None = None, strict: bool | None = None) -> list[HumanMotion]:
     """Read a motion file (or a folder of clips) into canonical clips, one per clip.
 
     format: override detection (see :data:`FORMATS`); clip: keep only that clip index (for a
@@ -142,13 +128,16 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
     features; units ("m", "cm", "mm", "inch", "cmu") and up ("x", "y", "z") override
     detection; name_map: TOML path or {keypoint: joint spec} for BVH skeletons; skeleton: the
     ASF file of an AMC motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc); stats:
-    statistics file of normalised MotionFix/OmniME 207-d features.
+    statistics file of normalised MotionFix/OmniME 207-d features; body_model: the user's SMPL-family
+    model file for SMPL parameters (else an approximate skeleton with a warning, or a refusal with
+    strict).
     Raises :class:`~motion2robot.errors.InputFileError` with a one-line message on bad input.
     """
     path = Path(path)
     if format is not None and format not in FORMATS:
         raise fail(path, f"unknown --format {format!r}", f"use one of {', '.join(FORMATS)}")
-    opts = ReadOptions(clip, fps, mean, std, units, up, name_map, skeleton, stats=stats)
+    opts = ReadOptions(clip, fps, mean, std, units, up, name_map, skeleton, stats=stats, body_model=body_model,
+                       strict=bool(strict))
     fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
     if fast is not None:
         return fast

@@ -30,16 +30,14 @@ def matrix_to_6d(r: np.ndarray) -> np.ndarray:
 def matrix_from_axis_angle(aa: np.ndarray) -> np.ndarray:
     """(..., 3) axis * angle (radians) -> (..., 3, 3), Rodrigues' formula (exact at angle 0)."""
     aa = np.asarray(aa, dtype=np.float64)
-    angle = np.linalg.norm(aa, axis=-1)[..., None, None]
-    safe = np.where(angle > 1e-12, angle, 1.0)
-    k = aa[..., None, :] / safe[..., 0]
-    kx, ky, kz = k[..., 0, 0], k[..., 0, 1], k[..., 0, 2]
+    angle = np.linalg.norm(aa, axis=-1)
+    k = aa / np.where(angle > 1e-12, angle, 1.0)[..., None]
+    kx, ky, kz = k[..., 0], k[..., 1], k[..., 2]
     zero = np.zeros_like(kx)
     cross = np.stack([np.stack([zero, -kz, ky], -1), np.stack([kz, zero, -kx], -1),
                       np.stack([-ky, kx, zero], -1)], -2)
-    eye = np.broadcast_to(np.eye(3), cross.shape)
-    r = eye + np.sin(angle) * cross + (1.0 - np.cos(angle)) * (cross @ cross)
-    return np.where(angle > 1e-12, r, eye)
+    s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
+    return np.eye(3) + s * cross + (1.0 - c) * (cross @ cross)
 
 
 def yaw_of(r: np.ndarray) -> np.ndarray:
