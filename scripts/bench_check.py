@@ -18,6 +18,7 @@ import numpy as np
 
 from motion2robot.robot import load_robot
 from motion2robot.robot_motion import RobotMotion
+from motion2robot.validate import examples
 from motion2robot.validate.api import kinematic_checks
 from motion2robot.validate.context import prepare
 from motion2robot.validate.options import CheckOptions
@@ -62,6 +63,11 @@ def main() -> None:
     print(f"kinematic + balance + torque checks: {n / best['total']:,.0f} frames/s wall clock, "
           f"{n / best['cpu']:,.0f} frames/s of CPU time (per-frame pass + inverse dynamics "
           f"{best['prepare'] / n * 1e6:.1f} us/frame, checks {best['checks'] / n * 1e6:.1f} us/frame; best of {args.repeat})")
+    lean = examples.slow_lean(robot) if robot.name == "op3" else motion
+    for name, mo in (("bench motion", motion), ("slow lean (ZMP leaves the feet)", lean)):
+        dyn = prepare(mo, robot, opts).dyn
+        print(f"contact forces, {name}: {dyn.supplied.mean():.0%} of frames supplied by friction-feasible forces, "
+              f"{dyn.fallback.sum()} of {mo.num_frames} frames needed the library QP")
     short = RobotMotion(motion.qpos[: int(args.playback_seconds * motion.fps)], motion.fps, motion.joint_names, motion.robot)
     sctx = prepare(short, robot, opts)
     sim_s = short.duration + opts.settle_time

@@ -46,29 +46,26 @@ def test_differentiate_matches_mujoco(op3):
 
 
 def test_contact_rows_are_the_jacobian_transpose(op3):
-    """A^T and J^T of the 14 contact unknowns equal MuJoCo's site Jacobians at a frame."""
+    """A^T and J^T of the 24 corner-force unknowns equal MuJoCo's site Jacobians at a frame."""
     ctx = prepare(yawed_waving(op3), op3, CheckOptions())
-    A, J = contact_rows(ctx.kin, op3)
+    A, J, C = contact_rows(ctx.kin, op3)
+    A, J = A @ C, J @ C  # corner forces -> root and hinge rows
     t = 70
     m, d = op3.model, mujoco.MjData(op3.model)
     d.qpos[:] = ctx.kin.qpos[t]
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)
-    u = np.random.default_rng(0).normal(size=14)
+    f = np.random.default_rng(0).normal(size=24)
     gen = np.zeros(m.nv)
     for k in range(2):
         for c in range(4):
             jp = np.zeros((3, m.nv))
             mujoco.mj_jacSite(m, d, jp, None, int(op3.sole_sites[k, c]))
-            gen += jp.T @ np.array([0.0, 0.0, u[4 * k + c]])
-        jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
-        mujoco.mj_jacSite(m, d, jp, jr, int(op3.sole_center_sites[k]))
-        fx, fy, mz = u[8 + 3 * k: 11 + 3 * k]
-        gen += jp.T @ np.array([fx, fy, 0.0]) + jr.T @ np.array([0.0, 0.0, mz])
+            gen += jp.T @ f[3 * (4 * k + c): 3 * (4 * k + c) + 3]
     R = d.xmat[op3.root_body].reshape(3, 3)
     root_rows = np.concatenate([gen[:3], R @ gen[3:6]])  # MuJoCo's free rotation rows are local
-    np.testing.assert_allclose(A[t] @ u, root_rows, atol=1e-9)
-    np.testing.assert_allclose(J[t] @ u, gen[6:], atol=1e-9)
+    np.testing.assert_allclose(A[t] @ f, root_rows, atol=1e-9)
+    np.testing.assert_allclose(J[t] @ f, gen[6:], atol=1e-9)
 
 
 def test_standing_still_is_supported_with_zmp_at_the_com(op3):

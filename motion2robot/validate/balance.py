@@ -7,8 +7,10 @@ boundary in metres (positive inside). The ZMP is the multi-body one from the inv
 cart-table approximation. A frame without any supporting corner is flight.
 
 Verdict: fails where the ZMP is outside the polygon by more than ``zmp_tolerance`` for at least
-``min_run`` frames, and on flight frames unless ``allow_flight``. The CoM (static) margin is
-reported as a figure and in the reasons.
+``min_run`` frames, on flight frames unless ``allow_flight``, and where the ZMP is inside but no
+friction-feasible contact forces supply the required wrench (the feet would slip or spin: see
+:mod:`~motion2robot.validate.contact_forces`). The CoM (static) margin is reported as a figure and
+in the reasons.
 """
 
 from __future__ import annotations
@@ -37,6 +39,17 @@ def _worst(margin: np.ndarray, mask: np.ndarray) -> tuple[float, int] | None:
     return float(-margin[k]), int(k)
 
 
+def _slip_worst(ctx: Context, slip: np.ndarray) -> dict | None:
+    """The largest force and twist the floor could not supply in the ``slip`` frames."""
+    if not slip.any():
+        return None
+    res = ctx.dyn.residual[slip]
+    force = np.linalg.norm(res[:, :3], axis=1)
+    k = int(np.flatnonzero(slip)[int(np.argmax(force + np.abs(res[:, 5])))])
+    return {"force_n": round(float(force.max()), 3), "twist_nm": round(float(np.abs(res[:, 5]).max()), 4),
+            "frame": k, "mu": [round(float(v), 3) for v in ctx.dyn.mu]}
+
+
 def balance(ctx: Context, com_zmp: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
     """CoM and ZMP margins, flight frames, and the ZMP verdict (``com_zmp``: :func:`margins`, if
     already computed)."""
@@ -45,8 +58,12 @@ def balance(ctx: Context, com_zmp: tuple[np.ndarray, np.ndarray] | None = None) 
     flight = ~ctx.support.any(axis=(1, 2))
     zmp_out = keep_runs(np.nan_to_num(zmp_m, nan=np.inf) < -opts.zmp_tolerance, opts.min_run)
     com_out = np.nan_to_num(com_m, nan=np.inf) < 0
-    bad = zmp_out | (flight if not opts.allow_flight else np.zeros_like(flight))
+    zmp_in = np.nan_to_num(zmp_m, nan=-np.inf) >= -opts.zmp_tolerance
+    slip = keep_runs(~flight & zmp_in & ~ctx.dyn.supplied, opts.min_run)
+    bad = zmp_out | slip | (flight if not opts.allow_flight else np.zeros_like(flight))
     out: dict = {"ok": not bad.any(), "frames": frame_list(bad)}
+    out["slip_frames"] = frame_list(slip)
+    out["slip_worst"] = _slip_worst(ctx, slip)
     out["min_com_margin_m"] = round(float(np.nanmin(com_m)), 4) if np.isfinite(com_m).any() else None
     out["min_zmp_margin_m"] = round(float(np.nanmin(zmp_m)), 4) if np.isfinite(zmp_m).any() else None
     out["flight_frames"] = frame_list(flight)

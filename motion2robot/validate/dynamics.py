@@ -1,32 +1,29 @@
-"""Joint torques by inverse dynamics, with the ground reaction spread over the soles in contact.
+"""Joint torques by inverse dynamics, with a floor reaction that could really happen.
 
 Method (per frame, vectorised over the trajectory):
 
 1. ``mj_rne`` gives the generalised force tau = M(q) qacc + c(q, qvel) (gravity included) that
    would produce the finite-difference accelerations (:mod:`~motion2robot.validate.kinematics`).
 2. Its 6 free-root rows are the wrench the world must supply: force F (world) and moment
-   R tau_rot about the root origin. Only the floor can supply it: a normal force f_i >= 0 at
-   each supporting sole corner, and per foot a tangential (friction) force (f_x, f_y) at the sole
-   centre and a friction moment m_z about the vertical: 8 + 6 = 14 unknowns u with A u = wrench
-   (A: the 6 x 14 root rows of J_c^T).
-3. The system is statically indeterminate (two feet, four corners each), so among the solutions
-   we take the one a torque-minimising controller would use: minimise the squared hinge torques
-   ||tau_h - J_h u||^2 plus a small regularisation of u (tangential components cost
-   ``TANGENTIAL_COST`` times more than normal ones, keeping friction demands low), with the
-   normal forces kept non-negative by an active set (corners that would pull are dropped and the
-   frame re-solved). The wrench equality is a stiff quadratic penalty, so each pass is one batched
-   14 x 14 solve per frame, and a wrench the floor cannot supply (flight, ZMP outside the
-   support) is met in the least-squares sense, its remainder reported as a residual. The torques
-   are therefore close to the least any contact distribution needs: a joint over its limit here
-   is over it for every controller.
-4. Hinge torques are tau_h - J_h u with the hinge rows of the contact Jacobian: for hinge j on
-   the path to the foot (axis a_j, anchor o_j in world), a point force f at p contributes
-   a_j . ((p - o_j) x f) and a vertical moment m_z contributes a_j,z m_z. Optionally the servo's
-   own reflected inertia and damping (the MJCF's armature * qacc + damping * qvel) are added: the
-   damping of a servo model is its speed-torque slope, so this is the torque the motor must make.
+   R tau_rot about the root origin. Only the floor can supply it, through the supporting sole
+   corners: a force per corner inside the friction cone (mu from the model's floor and sole geoms),
+   which keeps each foot's centre of pressure on its sole (:mod:`~.contact_forces`).
+3. The system is statically indeterminate (two feet, four corners each), so among the admissible
+   forces we take the ones a torque-minimising controller would use: minimise the squared hinge
+   torques plus a small regularisation (tangential force costs ``TANGENTIAL_COST`` times more than
+   normal force), the wrench equality a stiff penalty. A wrench no admissible force supplies
+   (flight, ZMP outside the soles, not enough friction) leaves a residual, reported per frame. The
+   torques are therefore close to the least any admissible contact distribution needs: a joint
+   over its limit here is over it for every controller, and no figure rests on a force the floor
+   cannot give.
+4. Hinge torques are tau_h - J_h f with the hinge rows of the contact Jacobian. Optionally the
+   servo's own reflected inertia and damping (the MJCF's armature * qacc + damping * qvel) are
+   added: the damping of a servo model is its speed-torque slope, so this is the torque the motor
+   must make.
 
 The multi-body ZMP follows from the same root wrench: the floor point where the required moment
-has no horizontal component.
+has no horizontal component. Where the forces supply the wrench (residual ~ 0) it equals their
+centre of pressure ``cop_xy``; where they cannot, the ZMP says where the pressure would have to be.
 """
 
 from __future__ import annotations
@@ -36,7 +33,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2robot.robot.robot import Robot
+from motion2robot.validate.contact_forces import (
+    CORNERS,
+    corner_map,
+    foot_wrench_rows,
+    friction_coefficients,
+    solve_contact_forces,
+)
 from motion2robot.validate.kinematics import Kinematics
+from motion2robot.validate.models import floor_geom
 
 #: Cost of a tangential unit force relative to a normal one in the force regularisation.
 TANGENTIAL_COST = 100.0
@@ -44,27 +49,39 @@ TANGENTIAL_COST = 100.0
 REGULARISATION = 1e-3
 #: Weight of the root-wrench equality (penalty), per squared robot height (m^2).
 PENALTY = 1e6
-#: Active-set passes for the non-negative normal forces.
-ACTIVE_SET_ITERATIONS = 8
 #: A frame whose required vertical force is below this fraction of m*g has no defined ZMP.
 MIN_NORMAL_FRACTION = 0.05
+#: Unsupplied force (fraction of m*g) or moment (fraction of m*g*height) above which a frame's
+#: contact forces are not admissible.
+RESIDUAL_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
 class Dynamics:
     """tau (T, n) hinge torques (N*m) in ``joint_names`` order, of which servo_tau (T, n) is the
-    servo's own armature * qacc + damping * qvel (zero without servo dynamics); normal (T, 2, 4) corner normal
-    forces (N); friction (T, 2, 3) per foot (f_x, f_y (N), m_z (N*m)); residual (T, 6) unsupplied
-    root wrench [force; moment about the root] (world); zmp_xy (T, 2) (NaN where undefined);
-    normal_force (T,) total required vertical force (N)."""
+    servo's own armature * qacc + damping * qvel (zero without servo dynamics); forces (T, 2, 4, 3)
+    floor reaction per sole corner (N, world), each inside its friction cone; mu (2,) friction per
+    foot; residual (T, 6) unsupplied root wrench [force; moment about the root] (world);
+    supplied (T,) bool: the residual is within ``RESIDUAL_TOLERANCE``; zmp_xy (T, 2) multi-body
+    ZMP of the required wrench (NaN where undefined); cop_xy (T, 2) centre of pressure of
+    ``forces`` (NaN without load); normal_force (T,) total required vertical force (N); fallback
+    (T,) bool frames the library QP solved."""
 
     tau: np.ndarray
     servo_tau: np.ndarray
-    normal: np.ndarray
-    friction: np.ndarray
+    forces: np.ndarray
+    mu: np.ndarray
     residual: np.ndarray
+    supplied: np.ndarray
     zmp_xy: np.ndarray
+    cop_xy: np.ndarray
     normal_force: np.ndarray
+    fallback: np.ndarray
+
+    @property
+    def normal(self) -> np.ndarray:
+        """(T, 2, 4) corner normal forces (N)."""
+        return self.forces[..., 2]
 
 
 def foot_ancestor_mask(robot: Robot) -> np.ndarray:
@@ -82,88 +99,51 @@ def foot_ancestor_mask(robot: Robot) -> np.ndarray:
     return out
 
 
-def contact_rows(kin: Kinematics, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
-    """(A (T, 6, 14), J (T, n, 14)): root rows and hinge rows of the 14 contact unknowns
-    [f_z of the 8 corners (left 0-3, right 0-3); f_x, f_y, m_z left; f_x, f_y, m_z right]."""
-    T, n = kin.num_frames, robot.n_joints
-    p = kin.corners.reshape(T, 8, 3)
-    c = kin.corners.mean(axis=2)  # (T, 2, 3) sole centres
-    d = p - kin.qpos[:, None, :3]
-    dc = c - kin.qpos[:, None, :3]
-    A = np.zeros((T, 6, 14))
-    A[:, 2, :8] = 1.0
-    A[:, 3, :8], A[:, 4, :8] = d[..., 1], -d[..., 0]  # (p - x) x e_z
-    for k in range(2):
-        ix, iy, iz = 8 + 3 * k, 9 + 3 * k, 10 + 3 * k
-        A[:, 0, ix] = 1.0
-        A[:, 4, ix], A[:, 5, ix] = dc[:, k, 2], -dc[:, k, 1]  # (c - x) x e_x
-        A[:, 1, iy] = 1.0
-        A[:, 3, iy], A[:, 5, iy] = -dc[:, k, 2], dc[:, k, 0]  # (c - x) x e_y
-        A[:, 5, iz] = 1.0
-    a, o = kin.xaxis, kin.xanchor  # (T, n, 3)
-    mask = foot_ancestor_mask(robot).astype(float)  # (n, 2)
-    J = np.zeros((T, n, 14))
-    # (a x (p - o))_z = a_x p_y - a_y p_x - (a_x o_y - a_y o_x)
-    az_o = a[..., 0] * o[..., 1] - a[..., 1] * o[..., 0]  # (T, n)
-    J[..., :8] = a[..., 0, None] * p[:, None, :, 1] - a[..., 1, None] * p[:, None, :, 0] - az_o[..., None]
-    J[..., :8] *= np.repeat(mask, 4, axis=1)
-    for k in range(2):
-        rc = c[:, None, k, :] - o  # (T, n, 3)
-        J[..., 8 + 3 * k] = (a[..., 1] * rc[..., 2] - a[..., 2] * rc[..., 1]) * mask[:, k]
-        J[..., 9 + 3 * k] = (a[..., 2] * rc[..., 0] - a[..., 0] * rc[..., 2]) * mask[:, k]
-        J[..., 10 + 3 * k] = a[..., 2] * mask[:, k]
-    return A, J
+def contact_rows(kin: Kinematics, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A_w (T, 6, 12), J_w (T, n, 12), C (T, 12, 24)): root rows and hinge rows of the feet's
+    wrenches, and the map from the corner forces [f_x, f_y, f_z per corner; left corners 0-3,
+    right 0-3] to those wrenches (see :mod:`~motion2robot.validate.contact_forces`)."""
+    centres = kin.corners.mean(axis=2)
+    A, J = foot_wrench_rows(centres, kin.qpos[:, :3], kin.xaxis, kin.xanchor, foot_ancestor_mask(robot))
+    return A, J, corner_map(kin.corners, centres)
 
 
-def distribute_contact_forces(A: np.ndarray, J: np.ndarray, support: np.ndarray, wrench: np.ndarray,
-                              bias: np.ndarray, weights: np.ndarray, penalty: float) -> np.ndarray:
-    """Contact unknowns u (T, 14) (see :func:`contact_rows`) minimising
-    ||bias - J u||^2 + u' diag(weights) u + penalty ||A u - wrench||^2 with u_i = 0 for corners not
-    in ``support`` (T, 8), friction of a foot without support zero, and corner normals >= 0."""
-    T = A.shape[0]
-    M = np.concatenate([J, np.sqrt(penalty) * A], axis=1)
-    Mt = M.transpose(0, 2, 1)
-    H = Mt @ M + np.diag(weights)
-    g = (Mt @ np.concatenate([bias, np.sqrt(penalty) * wrench], axis=1)[..., None])[..., 0]
-    act = support.copy()
-    u = np.zeros((T, 14))
-    idx = np.flatnonzero(act.any(axis=1))
-    diag = np.arange(14)
-    for _ in range(ACTIVE_SET_ITERATIONS):
-        if idx.size == 0:
-            break
-        a = act[idx]
-        m = np.concatenate([a, np.repeat(a.reshape(-1, 2, 4).any(axis=2), 3, axis=1)], axis=1).astype(float)
-        K = H[idx] * m[:, :, None] * m[:, None, :]
-        K[:, diag, diag] += 1.0 - m
-        u[idx] = np.linalg.solve(K, (g[idx] * m)[..., None])[..., 0]
-        pulling = a & (u[idx, :8] < -1e-6)
-        rows = pulling.any(axis=1)
-        act[idx[rows]] &= ~pulling[rows]
-        idx = idx[rows]
-    u[:, :8] = np.where(act, np.maximum(u[:, :8], 0.0), 0.0)
-    has = np.repeat(act.reshape(T, 2, 4).any(axis=2), 3, axis=1)
-    u[:, 8:] = np.where(has, u[:, 8:], 0.0)
-    return u
+def centre_of_pressure(forces: np.ndarray, corners: np.ndarray, min_force: float) -> np.ndarray:
+    """(T, 2) floor point of the normal forces (T, 2, 4, 3) at ``corners`` (T, 2, 4, 3); NaN below
+    ``min_force`` N in all."""
+    fz = forces[..., 2].reshape(len(forces), -1)
+    total = fz.sum(axis=1)
+    ok = total > min_force
+    cop = (fz[..., None] * corners[..., :2].reshape(len(forces), -1, 2)).sum(axis=1) / np.where(ok, total, 1.0)[:, None]
+    cop[~ok] = np.nan
+    return cop
 
 
 def inverse_dynamics(kin: Kinematics, robot: Robot, support: np.ndarray, *,
                      servo_dynamics: bool = True) -> Dynamics:
-    """Hinge torques and contact forces for the trajectory in ``kin``.
+    """Hinge torques and admissible contact forces for the trajectory in ``kin``.
 
     support: (T, 2, 4) bool sole corners that may push on the floor."""
     T = kin.num_frames
     root_pos = kin.qpos[:, :3]
     moment_root = (kin.root_xmat @ kin.rne[:, 3:6, None])[..., 0]
     wrench = np.concatenate([kin.rne[:, :3], moment_root], axis=1)
-    A, J = contact_rows(kin, robot)
+    bias = kin.rne[:, 6:]
+    A, J, C = contact_rows(kin, robot)
+    mu = friction_coefficients(kin.model, robot.foot_bodies, floor_geom(kin.model))
     h2 = max(robot.height, 1e-3) ** 2
-    half = [max(f.sole_half[0], 1e-3) for f in robot.config.feet]
-    w = np.concatenate([np.ones(8)] + [[TANGENTIAL_COST, TANGENTIAL_COST, TANGENTIAL_COST / half[k] ** 2] for k in range(2)])
-    u = distribute_contact_forces(A, J, support.reshape(T, 8), wrench, kin.rne[:, 6:],
-                                  REGULARISATION * h2 * w, PENALTY * h2)
-    tau = kin.rne[:, 6:] - (J @ u[..., None])[..., 0]
-    residual = wrench - (A @ u[..., None])[..., 0]
+    reg = REGULARISATION * h2 * np.tile([TANGENTIAL_COST, TANGENTIAL_COST, 1.0], 2 * CORNERS)
+    pen = PENALTY * h2
+    Jt, At = J.transpose(0, 2, 1), A.transpose(0, 2, 1)
+    Q = Jt @ J + pen * (At @ A)
+    q = (Jt @ bias[..., None] + pen * (At @ wrench[..., None]))[..., 0]
+    f, _, fallback = solve_contact_forces(Q, q, C, reg, support.reshape(T, 2 * CORNERS), mu)
+    feet = (C @ f.reshape(T, -1, 1))  # (T, 12, 1) the feet's wrenches
+    tau = bias - (J @ feet)[..., 0]
+    residual = wrench - (A @ feet)[..., 0]
+    weight = robot.mass * 9.81
+    supplied = ((np.linalg.norm(residual[:, :3], axis=1) <= RESIDUAL_TOLERANCE * weight)
+                & (np.linalg.norm(residual[:, 3:], axis=1) <= RESIDUAL_TOLERANCE * weight * robot.height))
     servo = np.zeros_like(tau)
     if servo_dynamics:
         m = robot.model
@@ -173,9 +153,11 @@ def inverse_dynamics(kin: Kinematics, robot: Robot, support: np.ndarray, *,
     # ZMP: moment about the world origin of the required wrench, zero horizontal moment at z = 0
     N0 = np.cross(root_pos, wrench[:, :3]) + moment_root
     Fz = wrench[:, 2]
-    ok = Fz > MIN_NORMAL_FRACTION * robot.mass * 9.81
+    ok = Fz > MIN_NORMAL_FRACTION * weight
     safe = np.where(ok, Fz, 1.0)
     zmp = np.stack([-N0[:, 1] / safe, N0[:, 0] / safe], axis=1)
     zmp[~ok] = np.nan
-    return Dynamics(tau=tau, servo_tau=servo, normal=u[:, :8].reshape(T, 2, 4), friction=u[:, 8:].reshape(T, 2, 3),
-                    residual=residual, zmp_xy=zmp, normal_force=Fz)
+    forces = f.reshape(T, 2, CORNERS, 3)
+    cop = centre_of_pressure(forces, kin.corners, MIN_NORMAL_FRACTION * weight)
+    return Dynamics(tau=tau, servo_tau=servo, forces=forces, mu=mu, residual=residual, supplied=supplied,
+                    zmp_xy=zmp, cop_xy=cop, normal_force=Fz, fallback=fallback)

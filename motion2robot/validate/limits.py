@@ -91,6 +91,7 @@ def torque_limits(ctx: Context) -> dict:
             "worst_joint": ctx.robot.joint_names[worst] if ratio.size else None,
             "mean_ratio": round(float(ratio.mean()), 3) if ratio.size else 0.0,
             "method": "mj_rne inverse dynamics with finite-difference velocities/accelerations; floor reaction "
-                      "from the supporting sole corners, distributed to minimise the hinge torques (normal forces >= 0)"
+                      "from the supporting sole corners, each corner force inside the friction cone (so the centre of "
+                      "pressure stays on the soles), distributed to minimise the hinge torques"
                       + ("; the servo's armature * qacc + damping * qvel added" if ctx.options.servo_dynamics else ""),
             "violations": viol}

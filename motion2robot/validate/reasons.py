@@ -97,6 +97,12 @@ def _balance(c: dict, fps: float, fall: str) -> list[str]:
             frames = c[f"{key}_outside_frames"]
             out.append(f"{what} leaves the support polygon at {frames[0] / fps:.2f} s (frames "
                        f"{frame_ranges(frames, 4)}), by up to {_distance(w['by_m'])} at {w['time_s']:.2f} s")
+    slip = c.get("slip_worst")
+    if slip:
+        mu = "/".join(f"{v:g}" for v in slip["mu"])
+        out.append(f"no friction-feasible contact forces {_where(c['slip_frames'], fps)}: the feet would slip, "
+                   f"the floor (friction {mu}) falling short by up to {slip['force_n']:.1f} N and "
+                   f"{slip['twist_nm']:.2f} N*m of twist")
     if c.get("flight_frames") and not c.get("ok", True):
         out.append(f"no sole touches the floor (flight) {_where(c['flight_frames'], fps)}")
     if out and fall:
