@@ -1,0 +1,122 @@
+"""``retarget_edit(source, edit, robot)``: both motions on the robot, the edit keeping the source's
+robot trajectory for every hinge whose body parts it did not change.
+
+The two human motions are compared on the frames both have, after resampling the edit to the
+source's rate (editors may change either). The source is retargeted as usual; the edit only over
+the frames where some part changed (plus the blend and a margin), with the source's scale; the two
+are then composed per hinge (:mod:`~motion2robot.edit.compose`). Nothing is re-solved after the
+composition: the checks of the composed motion say whether it stays feasible.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from motion2robot.edit.compose import compose
+from motion2robot.edit.parts import PARTS, TOLERANCE, hinge_parts, part_deviation
+from motion2robot.errors import InputFileError
+from motion2robot.motion.human import SMPL22_PARENTS, HumanMotion
+from motion2robot.motion.ops import resample, trim
+from motion2robot.robot_motion import RobotMotion
+from motion2robot.util.ranges import frame_ranges
+
+#: Seconds of blend between the source's and the edit's trajectory at each end of an edit.
+BLEND_SECONDS = 0.25
+#: Extra frames retargeted beyond the blend on each side of the edited frames.
+MARGIN_FRAMES = 10
+#: Mean relative bone-length difference above which two motions are different bodies.
+SKELETON_TOLERANCE = 0.15
+#: A robot hinge differs from the source's where it moved by more than this (rad).
+HINGE_EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class EditResult:
+    """source / edited: robot motions over the common frames. human: {part: {"frames", "max_m"}}
+    for the parts the edit changed; robot: {hinge: {"frames", "max_rad"}} for the hinges that
+    differ from the source's; info: tolerance, blend, retargeted window, timings."""
+
+    source: RobotMotion
+    edited: RobotMotion
+    human: dict[str, dict[str, Any]]
+    robot: dict[str, dict[str, Any]]
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+def _bones(m: HumanMotion) -> np.ndarray:
+    p = m.positions
+    return np.array([np.median(np.linalg.norm(p[:, j] - p[:, q], axis=-1))
+                     for j, q in enumerate(SMPL22_PARENTS) if q >= 0])
+
+
+def common_frames(source: HumanMotion, edit: HumanMotion, name: str = "the pair") -> tuple[HumanMotion, HumanMotion]:
+    """Both motions at the source's rate, trimmed to the frames both have; InputFileError when
+    they share fewer than 2 frames or are different bodies."""
+    if abs(edit.fps - source.fps) > 1e-9:
+        edit = resample(edit, source.fps)
+    t = min(source.num_frames, edit.num_frames)
+    if t < 2:
+        raise InputFileError(f"{name}: the two motions have no overlapping frames ({source.num_frames} and "
+                             f"{edit.num_frames} at {source.fps:g} fps); give an edit of this source")
+    a, b = _bones(source), _bones(edit)
+    diff = float(np.mean(np.abs(a - b) / np.maximum(a, 1e-6)))
+    if diff > SKELETON_TOLERANCE:
+        raise InputFileError(f"{name}: the two motions have different skeletons (bone lengths differ by "
+                             f"{diff:.0%} on average); give an edit made from this source motion")
+    return trim(source, 0, t), trim(edit, 0, t)
+
+
+def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *,
+                  tolerance: float = TOLERANCE, blend_seconds: float = BLEND_SECONDS,
+                  name: str = "the pair") -> EditResult:
+    """Retarget a (source, edit) pair; see the module docstring."""
+    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.retarget.scale import auto_scale
+
+    source, edit = common_frames(source, edit, name)
+    t0 = time.perf_counter()
+    dev = part_deviation(source, edit)
+    changed = {p: d > tolerance for p, d in dev.items()}
+    opts = options or RetargetOptions()
+    if opts.scale is None:
+        opts = replace(opts, scale=auto_scale(source, robot))
+    src = retarget(source, robot, opts)
+    t_src = time.perf_counter() - t0
+    blend = int(round(blend_seconds * source.fps))
+    any_changed = np.any(list(changed.values()), axis=0)
+    q_edit = src.qpos.copy()
+    window = None
+    if any_changed.any():
+        idx = np.flatnonzero(any_changed)
+        lo = max(0, int(idx[0]) - blend - MARGIN_FRAMES)
+        hi = min(source.num_frames, int(idx[-1]) + blend + MARGIN_FRAMES + 1)
+        if hi - lo < 2:
+            lo, hi = max(0, hi - 2), max(hi, 2)
+        window = (lo, hi)
+        q_edit[lo:hi] = retarget(trim(edit, lo, hi), robot, opts).qpos
+    qpos, weights = compose(src.qpos, q_edit, changed, hinge_parts(robot), blend)
+    elapsed = time.perf_counter() - t0
+    human = {p: {"frames": frame_ranges(np.flatnonzero(c)), "max_m": float(dev[p][c].max()),
+                 "frames_changed": int(c.sum())} for p, c in changed.items() if c.any()}
+    robot_diff = {}
+    for h, jn in enumerate(robot.joint_names):
+        d = np.abs(qpos[:, 7 + h] - src.qpos[:, 7 + h])
+        moved = np.flatnonzero(d > HINGE_EPS)
+        if moved.size:
+            robot_diff[jn] = {"frames": frame_ranges(moved), "max_rad": float(d.max()), "frames_changed": int(moved.size)}
+    root = np.abs(qpos[:, :7] - src.qpos[:, :7]).max(axis=1)
+    if (root > HINGE_EPS).any():
+        robot_diff["root"] = {"frames": frame_ranges(np.flatnonzero(root > HINGE_EPS)),
+                              "max_rad": float(root.max()), "frames_changed": int((root > HINGE_EPS).sum())}
+    info = {"tolerance_m": tolerance, "blend_frames": blend, "retargeted_window": window,
+            "frames": source.num_frames, "fps": source.fps, "parts": list(PARTS),
+            "seconds": {"source": round(t_src, 3), "total": round(elapsed, 3)}}
+    edited = RobotMotion(qpos, src.fps, src.joint_names, src.robot,
+                         {**dict(src.meta), **{k: v for k, v in edit.meta.items() if k in ("source", "prompt", "clip")},
+                          "edit": {"human_parts_changed": sorted(human), "source_weight_min": float(weights.min()),
+                                   **info}})
+    return EditResult(src, edited, human, robot_diff, info)
