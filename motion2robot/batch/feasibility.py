@@ -78,7 +78,9 @@ class FeasibilityJob:
         t["read_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "retarget"
         t0 = time.perf_counter()
-        motion = retarget(human, state.robot, state.retarget_options)
+        from motion2robot.retarget.control_path import with_control_path
+
+        motion = with_control_path(retarget(human, state.robot, state.retarget_options), human)
         t["retarget_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "check"
         t0 = time.perf_counter()
@@ -87,6 +89,9 @@ class FeasibilityJob:
         row.update(feasible=bool(report.feasible),
                    failed_checks=[name for name, c in report.checks.items() if c.get("ok") is False],
                    reasons=list(report.reasons), figures=dict(report.figures))
+        control = {k: v for k, v in report.checks.get("trajectory", {}).items() if k.startswith("control_")}
+        if control:
+            row["control"] = control
         if config.save_motions:
             stage[0] = "save"
             out = Path(config.save_motions) / motion_file_name(item)

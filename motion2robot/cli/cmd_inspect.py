@@ -45,6 +45,11 @@ def describe(m, index: int, total: int) -> str:
                        ("dropped", "dropped"), ("note", "note")):
         if meta.get(key) is not None:
             lines.append(f"  {label:<11} {meta[key]}")
+    if meta.get("control_path"):
+        n = sum(p is not None for p in meta["control_path"])
+        lines.append(f"  control     requested root path in {n} of {m.num_frames} frames ({meta.get('control_source')})")
+    elif meta.get("control_note"):
+        lines.append(f"  control     {meta['control_note']}")
     if meta.get("prompt"):
         lines.append(f"  prompt      \"{meta['prompt']}\"")
     return "\n".join(lines)

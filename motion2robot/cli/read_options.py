@@ -26,6 +26,10 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
                         "parameters from its rest joints and tree" + used_by("body_model"))
     p.add_argument("--strict", action="store_true", default=None,
                    help="refuse SMPL parameters without --body-model instead of using the approximate skeleton")
+    p.add_argument("--trajectory", metavar="FILE",
+                   help="root path the motion was asked to follow: (T,2) or (T,3) .npy/.csv/.txt in the motion "
+                        "file's axes and units; the robot's error against it is reported (OmniControl results "
+                        "carry theirs as 'hint')")
     p.add_argument("--units", choices=["m", "cm", "mm", "inch", "cmu"], help="override unit detection")
     p.add_argument("--up", choices=["x", "y", "z", "-x", "-y", "-z"], help="override up-axis detection")
     p.add_argument("--name-map", dest="name_map",
@@ -37,4 +41,4 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
 
 def read_args_kwargs(args: argparse.Namespace) -> dict:
     return {k: getattr(args, k, None) for k in ("format", "fps", "mean", "std", "units", "up", "name_map", "skeleton",
-                                          "stats", "body_model", "strict")}
+                                          "stats", "body_model", "strict", "trajectory")}

@@ -120,7 +120,8 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
                 units: str | None = None, up: str | None = None,
                 name_map: str | Path | Mapping[str, Any] | None = None,
                 skeleton: str | Path | None = None, stats: str | Path | None = None,
-                body_model: str | Path | None = None, strict: bool | None = None) -> list[HumanMotion]:
+                body_model: str | Path | None = None, strict: bool | None = None,
+                trajectory: str | Path | None = None) -> list[HumanMotion]:
     """Read a motion file (or a folder of clips) into canonical clips, one per clip.
 
     format: override detection (see :data:`FORMATS`); clip: keep only that clip index (for a
@@ -130,7 +131,8 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
     ASF file of an AMC motion (default: the .asf beside it, e.g. 01.asf for 01_01.amc); stats:
     statistics file of normalised MotionFix/OmniME 207-d features; body_model: the user's SMPL-family
     model file for SMPL parameters (else an approximate skeleton with a warning, or a refusal with
-    strict).
+    strict); trajectory: a (T, 2) / (T, 3) root path file the motion was asked to follow, in the file's
+    axes and units (attached as ``meta["control_path"]``, see :mod:`~motion2robot.motion.control`).
     Raises :class:`~motion2robot.errors.InputFileError` with a one-line message on bad input.
     """
     path = Path(path)
@@ -138,6 +140,16 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
         raise fail(path, f"unknown --format {format!r}", f"use one of {', '.join(FORMATS)}")
     opts = ReadOptions(clip, fps, mean, std, units, up, name_map, skeleton, stats=stats, body_model=body_model,
                        strict=bool(strict))
+    if trajectory is None:
+        return _read_any(path, format, opts)
+    from motion2robot.motion.control import from_trajectory, load_trajectory
+
+    arr = load_trajectory(trajectory)  # a bad path file stops before the motion is read
+    return [from_trajectory(m, trajectory, arr) for m in _read_any(path, format, opts)]
+
+
+def _read_any(path: Path, format: str | None, opts: ReadOptions) -> list[HumanMotion]:
+    clip = opts.clip
     fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
     if fast is not None:
         return fast

@@ -172,11 +172,18 @@ def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotio
     if too_long.size:
         raise fail(path, f"lengths exceed the motion array ({t} frames): samples {too_long.tolist()[:8]} "
                          f"claim {lengths[too_long].tolist()[:8]}", "re-save the results (lengths <= T)")
+    hint = obj.get("hint")
+    hint = hint if isinstance(hint, np.ndarray) and hint.ndim == 4 and len(hint) == n else None
     out = []
     for i, c in _pick(list(clips), opts.clip, path):
         prompt = text[i]
-        out.append(_canon(path, c[: lengths[i]], HUMANML3D_FPS, opts, "mdm_results", i,
-                          prompt=str(prompt) if prompt is not None else None))
+        m = _canon(path, c[: lengths[i]], HUMANML3D_FPS, opts, "mdm_results", i,
+                   prompt=str(prompt) if prompt is not None else None)
+        if hint is not None:  # OmniControl: the spatial control signal
+            from motion2robot.motion.control import from_hint
+
+            m = from_hint(m, hint[i])
+        out.append(m)
     return out
 
 
