@@ -107,3 +107,20 @@ def test_a_pair_of_different_bodies_is_refused_in_one_line(capsys) -> None:
                  str(MOTIONS / "bvh" / "xia_neutral_01_000.bvh"), "--no-physics"])
     err = capsys.readouterr().err
     assert code == 2 and "different skeletons" in err and err.count("\n") == 1
+
+
+@requires_shared
+def test_batch_of_pairs_summarises_the_edits_that_stay_executable(tmp_path: Path, source, capsys) -> None:
+    arm = [KP["right_elbow"], KP["right_wrist"]]
+    p = _rotate(source.positions, arm, KP["right_shoulder"], _bump(source.num_frames, 40, 80, 0.8), axis=0)
+    z2y = lambda a: np.stack([a[..., 1], a[..., 2], a[..., 0]], axis=-1)
+    np.save(tmp_path / "src.npy", z2y(source.positions))
+    np.save(tmp_path / "edit.npy", z2y(p))
+    (tmp_path / "pairs.txt").write_text("# source\tedit\nsrc.npy\tedit.npy\n")
+    out = tmp_path / "r.jsonl"
+    code = main(["batch", "--pairs", str(tmp_path / "pairs.txt"), "--out", str(out), "--no-physics", "-j", "1", "-q"])
+    text = capsys.readouterr().out
+    assert code == 0 and "edit pairs: 1; the edit stays executable in" in text
+    row = json.loads(out.read_text().splitlines()[0])
+    assert row["error"] is None and row["edit"]["human_parts_changed"] == ["right_arm"]
+    assert all(j.startswith("r_") for j in row["edit"]["robot_joints_changed"])

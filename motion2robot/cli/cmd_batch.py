@@ -33,6 +33,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--redo-errors", action="store_true", help="process again the clips whose row is an error")
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
+    p.add_argument("--pairs", action="store_true",
+                   help="INPUTS are edit pairs (editor result files, folders of them, or manifests of SOURCE<TAB>EDIT "
+                        "lines): each edit is retargeted keeping what it did not change (see 'edit'); the summary "
+                        "gives the share of edits that stay executable")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     from motion2robot.cli.read_options import add_read_options
 
@@ -58,8 +62,13 @@ def run(args: argparse.Namespace) -> int:
         import_ray()
     robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
     read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    expansion = None
+    if args.pairs:
+        from motion2robot.batch.pairs import expand_pairs
+
+        expansion = expand_pairs(args.inputs)
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
-                      read_options=read_options, robot=robot.name)
+                      read_options=read_options, robot=robot.name, expansion=expansion)
     exp = plan.expansion
     files = len({i.path for i in exp.items})
     note = [f"{len(exp.items)} clips in {files} files"]
@@ -78,7 +87,8 @@ def run(args: argparse.Namespace) -> int:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())))
+                         read_options=tuple(sorted(read_options.items())),
+                         job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:
