@@ -92,13 +92,15 @@ def test_edit_cli_writes_both_motions_and_the_diff(tmp_path: Path, source, capsy
     np.save(tmp_path / "src.npy", z2y(source.positions))
     np.save(tmp_path / "edit.npy", z2y(p))
     code = main(["edit", str(tmp_path / "src.npy"), str(tmp_path / "edit.npy"), "--no-physics",
-                 "--json", str(tmp_path / "diff.json")])
+                 "--json", str(tmp_path / "diff.json"), "--html", str(tmp_path / "r.html")])
     out = capsys.readouterr().out
     assert code in (0, 1)
     assert "human edit: left_arm changed in frames" in out and "equal the source's robot motion" in out
     assert (tmp_path / "edit_source_op3.npz").is_file() and (tmp_path / "edit_edited_op3.npz").is_file()
     doc = json.loads((tmp_path / "diff.json").read_text())
     assert set(doc["human_parts_changed"]) == {"left_arm"} and "edit_report" in doc
+    page = (tmp_path / "r.html").read_text()
+    assert "Edit against the source" in page and "left_arm changed in frames" in page
 
 
 @requires_shared

@@ -36,6 +36,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--blend", type=float, default=None, metavar="S", help="blend length in seconds (default 0.25)")
     p.add_argument("-o", "--out-dir", help="folder for the two robot motions (default: beside the edited file)")
     p.add_argument("--json", metavar="DIFF.json", help="write the diff and both feasibility reports as JSON")
+    p.add_argument("--html", metavar="REPORT.html",
+                   help="write the edited motion's HTML report with the diff against the source")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--no-balance", dest="balance", action="store_false",
                    help="do not keep the CoM over the support polygon (running, jumping)")
@@ -122,4 +124,13 @@ def run(args: argparse.Namespace) -> int:
                "fixes": [r for r in rep_src.reasons if r not in rep_edit.reasons]}
         Path(args.json).write_text(json.dumps(plain(doc), indent=1))
         print(f"diff written to {args.json}")
+    if args.html:
+        import html
+
+        from motion2robot.viz.html_report import write_html_report
+
+        body = "<ul>" + "".join(f"<li>{html.escape(x)}</li>" for x in diff_text(result, rep_src, rep_edit).splitlines()) + "</ul>"
+        path = write_html_report(rep_edit, result.edited, robot, args.html, human=edited,
+                                 sections=[("Edit against the source", body)])
+        print(f"HTML report written to {path}")
     return 0 if rep_edit.feasible else 1
