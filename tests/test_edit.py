@@ -126,3 +126,19 @@ def test_batch_of_pairs_summarises_the_edits_that_stay_executable(tmp_path: Path
     row = json.loads(out.read_text().splitlines()[0])
     assert row["error"] is None and row["edit"]["human_parts_changed"] == ["right_arm"]
     assert all(j.startswith("r_") for j in row["edit"]["robot_joints_changed"])
+
+
+@requires_shared
+def test_balance_override_only_where_the_composition_loses_balance(source, robot) -> None:
+    arm = [KP["right_elbow"], KP["right_wrist"]]
+    p = _rotate(source.positions, arm, KP["right_shoulder"], _bump(source.num_frames, 40, 80, 0.8), axis=0)
+    edit = HumanMotion(p, source.fps, meta=dict(source.meta))
+    plain = retarget_edit(source, edit, robot)
+    over = retarget_edit(source, edit, robot, balance_override=True)
+    frames = over.info["balance_override_frames"]
+    d = np.abs(over.edited.qpos - plain.edited.qpos).max(axis=1)
+    if frames is None:  # nothing to override: the same motion
+        assert d.max() == 0.0
+    else:  # only inside the retargeted window (plus nothing outside it)
+        lo, hi = over.info["retargeted_window"]
+        assert d[:lo].max(initial=0) == 0.0 and d[hi:].max(initial=0) == 0.0

@@ -39,6 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--html", metavar="REPORT.html",
                    help="write the edited motion's HTML report with the diff against the source")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
+    p.add_argument("--balance-override", action="store_true",
+                   help="let balance override the kept joints in frames where the composed motion loses its "
+                        "balance while the source's and the edit's own motions keep it (reported)")
     p.add_argument("--no-balance", dest="balance", action="store_false",
                    help="do not keep the CoM over the support polygon (running, jumping)")
     add_read_options(p)
@@ -79,6 +82,9 @@ def diff_text(result, rep_src, rep_edit) -> str:
     same = [j for j in result.source.joint_names if j not in result.robot]
     lines.append(f"robot: {len(same)} of {len(result.source.joint_names)} joints"
                  f"{'' if 'root' in result.robot else ' and the root'} equal the source's robot motion in every frame")
+    if result.info.get("balance_override_frames"):
+        lines.append(f"balance overrode the source's joints in frames {result.info['balance_override_frames']} "
+                     "(the composed motion lost its balance there; the edit's own solution is used)")
     lines.append(f"feasible: source {'yes' if rep_src.feasible else 'no'}, edit {'yes' if rep_edit.feasible else 'no'}")
     for r in rep_edit.reasons:
         if r not in rep_src.reasons:
@@ -105,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     result = retarget_edit(source, edited, robot, RetargetOptions(balance=args.balance),
                            tolerance=TOLERANCE if args.tolerance is None else args.tolerance,
                            blend_seconds=BLEND_SECONDS if args.blend is None else args.blend,
+                           balance_override=args.balance_override,
                            name=f"{args.source} + {args.edited or '(its edit)'}")
     out_dir = Path(args.out_dir) if args.out_dir else where.parent
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -5,7 +5,11 @@ The two human motions are compared on the frames both have, after resampling the
 source's rate (editors may change either). The source is retargeted as usual; the edit only over
 the frames where some part changed (plus the blend and a margin), with the source's scale; the two
 are then composed per hinge (:mod:`~motion2robot.edit.compose`). Nothing is re-solved after the
-composition: the checks of the composed motion say whether it stays feasible.
+composition. With ``balance_override``, balance may override the kept joints where it must: in
+the retargeted window, frames where the composed motion fails the (kinematic) balance check while
+both the source's and the edit's own robot motions pass it take every hinge and the root from the
+edit (with the same blend), and are reported. It is off by default: three more kinematic checks
+of the window cost about as much as the edit's retargeting, and kept joints then stay exact.
 """
 
 from __future__ import annotations
@@ -70,9 +74,31 @@ def common_frames(source: HumanMotion, edit: HumanMotion, name: str = "the pair"
     return trim(source, 0, t), trim(edit, 0, t)
 
 
+def _balance_must_override(robot, src: RobotMotion, q_comp: np.ndarray, q_edit: np.ndarray,
+                           window: tuple[int, int]) -> list[int]:
+    """Frames of the window where the composed motion fails the balance check and neither the
+    source's nor the edit's own robot motion does (kinematic checks on the window's frames, so the
+    three share the window's edge effects)."""
+    from motion2robot.validate import CheckOptions, check
+
+    if not src.meta.get("balance", True):
+        return []
+    lo, hi = window
+    opts = CheckOptions(physics=False)
+
+    def failing(q: np.ndarray) -> set[int]:
+        m = RobotMotion(q[lo:hi], src.fps, src.joint_names, src.robot, {})
+        return {lo + int(f) for f in check(m, robot, opts).checks.get("balance", {}).get("frames", [])}
+
+    bad = failing(q_comp)
+    if bad:
+        bad -= failing(src.qpos)
+    return sorted(bad - failing(q_edit)) if bad else []
+
+
 def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *,
                   tolerance: float = TOLERANCE, blend_seconds: float = BLEND_SECONDS,
-                  name: str = "the pair") -> EditResult:
+                  balance_override: bool = False, name: str = "the pair") -> EditResult:
     """Retarget a (source, edit) pair; see the module docstring."""
     from motion2robot.retarget import RetargetOptions, retarget
     from motion2robot.retarget.scale import auto_scale
@@ -98,7 +124,15 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
             lo, hi = max(0, hi - 2), max(hi, 2)
         window = (lo, hi)
         q_edit[lo:hi] = retarget(trim(edit, lo, hi), robot, opts).qpos
-    qpos, weights = compose(src.qpos, q_edit, changed, hinge_parts(robot), blend)
+    parts = hinge_parts(robot)
+    qpos, weights = compose(src.qpos, q_edit, changed, parts, blend)
+    overridden: list[int] = []
+    if window is not None and balance_override:
+        overridden = _balance_must_override(robot, src, qpos, q_edit, window)  # type: ignore[arg-type]
+        if overridden:
+            must = np.zeros(source.num_frames, bool)
+            must[overridden] = True
+            qpos, weights = compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)
     elapsed = time.perf_counter() - t0
     human = {p: {"frames": frame_ranges(np.flatnonzero(c)), "max_m": float(dev[p][c].max()),
                  "frames_changed": int(c.sum())} for p, c in changed.items() if c.any()}
@@ -113,6 +147,7 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
         robot_diff["root"] = {"frames": frame_ranges(np.flatnonzero(root > HINGE_EPS)),
                               "max_rad": float(root.max()), "frames_changed": int((root > HINGE_EPS).sum())}
     info = {"tolerance_m": tolerance, "blend_frames": blend, "retargeted_window": window,
+            "balance_override_frames": frame_ranges(overridden) if overridden else None,
             "frames": source.num_frames, "fps": source.fps, "parts": list(PARTS),
             "seconds": {"source": round(t_src, 3), "total": round(elapsed, 3)}}
     edited = RobotMotion(qpos, src.fps, src.joint_names, src.robot,
