@@ -18,6 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from motion2robot.errors import InputFileError
+from motion2robot.util.files import special_file
 from motion2robot.util.jsonable import plain
 
 NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
@@ -83,7 +84,15 @@ class RobotMotion:
     def save(self, path: str | Path) -> Path:
         """Write the ``.npz`` with exactly the keys of :data:`NPZ_KEYS`; returns the path."""
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        if not np.all(np.isfinite(self.qpos)) or not (np.isfinite(self.fps) and self.fps > 0):
+            bad = np.where(~np.all(np.isfinite(self.qpos), axis=1))[0]  # a bug upstream: never write it
+            raise ValueError(f"refusing to write {path}: qpos has NaN/inf in frames {_ranges(bad)} or fps is {self.fps}")
+        if path.is_dir():
+            raise InputFileError(f"{path}: is a directory; give a file name for the robot motion, e.g. {path / 'out.npz'}")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise InputFileError(f"{path}: cannot create its folder ({err.strerror}); choose another output path") from None
         tmp = path.with_name(path.name + ".part.npz")
         np.savez(
             tmp,
@@ -104,8 +113,15 @@ class RobotMotion:
             raise InputFileError(f"{path}: is a directory, not a robot motion .npz; give the file made by 'motion2robot retarget'")
         if not path.exists():
             raise InputFileError(f"{path}: no such file; check the path")
+        special = special_file(path)
+        if special is not None:  # a FIFO would block np.load for ever
+            raise InputFileError(f"{path}: {special}, not a robot motion .npz; give the file made by 'motion2robot retarget'")
         try:
-            with np.load(path, allow_pickle=False) as z:
+            z = np.load(path, allow_pickle=False)
+            if not isinstance(z, np.lib.npyio.NpzFile):
+                raise InputFileError(f"{path}: is a single array (.npy), not a robot motion .npz; human motion "
+                                     "must be retargeted first: 'motion2robot retarget'")
+            with z:
                 missing = [k for k in NPZ_KEYS if k not in z.files]
                 if missing:
                     raise InputFileError(
@@ -118,7 +134,7 @@ class RobotMotion:
                 meta = json.loads(str(z["meta"]))
         except InputFileError:
             raise
-        except (OSError, ValueError, zipfile.BadZipFile, json.JSONDecodeError, KeyError) as err:
+        except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, json.JSONDecodeError, KeyError) as err:
             raise InputFileError(
                 f"{path}: cannot read as a robot motion .npz ({err}); make one with 'motion2robot retarget'"
             ) from err
@@ -127,6 +143,11 @@ class RobotMotion:
         if not np.all(np.isfinite(qpos)):
             bad = np.where(~np.all(np.isfinite(qpos), axis=1))[0]
             raise InputFileError(f"{path}: qpos has NaN/inf in frames {_ranges(bad)}; retarget again")
+        if qpos.shape[0] < 1:
+            raise InputFileError(f"{path}: holds 0 frames; retarget a clip with frames")
+        if not (np.isfinite(fps) and 0.1 <= fps <= 10000):
+            raise InputFileError(f"{path}: fps is {fps}, not a frame rate (0.1 to 10000); the file is damaged, "
+                                 "retarget again")
         return cls(qpos=qpos, fps=fps, joint_names=names, robot=robot, meta=meta)
 
 

@@ -40,7 +40,7 @@ from motion2robot.errors import UserError
 from motion2robot.motion import HumanMotion, read_motion
 from motion2robot.motion.human import KP, SMPL22
 from motion2robot.motion.ops import trim
-from motion2robot.retarget import RetargetOptions, Weights, retarget
+from motion2robot.retarget import RetargetOptions, Weights, whole_body as retarget
 from motion2robot.retarget import compiled as compiled_mod
 from motion2robot.retarget import lanes
 from motion2robot.retarget.contacts import HEEL_LIFT, contact_labels

@@ -121,12 +121,12 @@ def test_guard_goals_stay_within_limits_and_step(targets, sign, ramp):
     rate = 100.0
     g = SafetyGuard(LIM, cal, rate, ramp_speed=0.5)
     last = g.start(cal.to_ticks(np.zeros(4) + [0.0, 0.0, 1.0, 0.0]))
-    step = np.floor((np.minimum(0.5, LIM.velocity) if ramp else LIM.velocity) * cal.ticks_per_rad / rate)
+    speed = (np.minimum(0.5, LIM.velocity) if ramp else LIM.velocity) * cal.ticks_per_rad / rate  # ticks per tick
     for t in targets:
         goal = g.next_goal(t, ramp)
         q = cal.to_radians(goal)
         assert np.all(q >= LIM.lower - 1e-12) and np.all(q <= LIM.upper + 1e-12)
-        assert np.all(np.abs(goal - last) <= np.maximum(step, 1))
+        assert np.all(np.abs(goal - last) <= speed + 1.0)  # one tick of quantisation at most
         held = ~np.isfinite(t)
         assert np.array_equal(goal[held], last[held])
         last = goal

@@ -80,10 +80,31 @@ def test_absurd_skeleton_size_in_bvh(tmp_path, capsys, scale) -> None:
     assert "units?" in msg and "--units" in msg
 
 
-def test_truncated_bvh(tmp_path, capsys) -> None:
-    (tmp_path / "t.bvh").write_text(bvh_text(frames=10, declared_frames=25))
-    msg = _err(capsys, tmp_path / "t.bvh")
-    assert "truncated" in msg and "Frames: 25" in msg
+@pytest.mark.parametrize("declared", [25, 4, -4])
+def test_bvh_frames_line_disagreeing_with_the_rows(tmp_path, capsys, declared) -> None:
+    """Issue 20: 'Frames: 10' with 189 rows read 10 frames, 'Frames: -4' dropped the last 4. The
+    rows are read, with a warning giving both counts; --strict (or a negative count) refuses."""
+    import warnings
+
+    from motion2robot.errors import InputWarning
+    from motion2robot.motion.bvh import parse_bvh
+
+    path = tmp_path / "t.bvh"
+    path.write_text(bvh_text(frames=10, declared_frames=declared))
+    if declared < 0:
+        assert "'Frames: -4' but the MOTION data holds 10 frames" in _err(capsys, path)
+        return
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        clip = parse_bvh(path)
+    assert clip.values.shape[0] == 10
+    assert len(w) == 1 and issubclass(w[0].category, InputWarning)
+    assert f"'Frames: {declared}' but the MOTION data holds 10 frames" in str(w[0].message)
+    with pytest.raises(InputFileError, match=f"'Frames: {declared}' but the MOTION data holds 10 frames"):
+        parse_bvh(path, strict=True)
+    code = main(["inspect", str(path)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 0 and len(err) == 1 and err[0].startswith("motion2robot: warning: ") and "10 frames" in err[0]
 
 
 def test_truncated_mid_row_bvh(tmp_path, capsys) -> None:

@@ -7,7 +7,7 @@ import pytest
 
 from motion2robot.motion import HumanMotion
 from motion2robot.motion.human import KP, SMPL22
-from motion2robot.retarget import RetargetOptions, Weights, retarget
+from motion2robot.retarget import RetargetOptions, Weights, whole_body as retarget
 from motion2robot.retarget.compiled import compiled_problem
 from motion2robot.retarget.metrics import acceptance
 from motion2robot.retarget.scale import Scale

@@ -44,7 +44,8 @@ def test_cli_fps_resamples(tmp_path):
 def test_cli_clip_all_writes_one_file_per_clip(tmp_path):
     out = tmp_path / "mdm.npz"
     src = MOTIONS / "mdm_results" / "mdm_walk_pickup_results.npy"
-    assert main(["retarget", str(src), "--clip", "all", "--no-balance", "-o", str(out)]) == 0
+    assert main(["retarget", str(src), "--clip", "all", "--no-balance", "--tempo", "human", "--legs", "whole",
+                 "-o", str(out)]) == 0
     assert sorted(p.name for p in tmp_path.glob("*.npz")) == ["mdm_clip0.npz", "mdm_clip1.npz", "mdm_clip2.npz"]
 
 

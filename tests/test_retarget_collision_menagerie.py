@@ -63,7 +63,7 @@ def test_g1_kick_keeps_the_arms_out_of_the_torso(g1):
     the polytope pairs and the damped extra projection steps keep them out (MuJoCo's geoms)."""
     from motion2robot.motion import read_motion
     from motion2robot.motion.ops import trim
-    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.retarget import RetargetOptions, whole_body as retarget
     from motion2robot.retarget.metrics import acceptance
 
     human = trim(read_motion(MOTIONS / "bvh" / "bandai_kick_normal_001.bvh")[0], 0, 80)

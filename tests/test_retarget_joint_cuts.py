@@ -123,7 +123,7 @@ def test_g1_dance_keeps_the_hip_roll_links_out_of_the_pelvis(g1):
     no capsule models); the joint-space cuts keep them out (MuJoCo's geoms)."""
     from motion2robot.motion import read_motion
     from motion2robot.motion.ops import trim
-    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.retarget import RetargetOptions, whole_body as retarget
     from motion2robot.retarget.metrics import acceptance
 
     human = trim(read_motion(MOTIONS / "bvh" / "bandai_dance-short_normal_001.bvh")[0], 280, 360)

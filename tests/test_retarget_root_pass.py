@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from motion2robot.retarget import RetargetOptions, retarget
+from motion2robot.retarget import RetargetOptions, whole_body as retarget
 from motion2robot.retarget.anchor_gap import foot_capsules, segment_distance, separate_anchors
 from motion2robot.retarget.collision import body_capsules
 from motion2robot.retarget.metrics import acceptance

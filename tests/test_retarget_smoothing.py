@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from motion2robot.motion import read_motion
-from motion2robot.retarget import RetargetOptions, Weights, native, retarget
+from motion2robot.retarget import RetargetOptions, Weights, native, whole_body as retarget
 from motion2robot.retarget.constraints import clamp_velocity
 from motion2robot.retarget.metrics import peak_acceleration, velocity_reversals
 from motion2robot.retarget.smoothing import _smooth, servo_targets, smooth_hinges, smooth_to_targets

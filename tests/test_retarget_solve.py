@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from motion2robot.motion import read_motion
-from motion2robot.retarget import RetargetOptions, Weights, retarget, solver
+from motion2robot.retarget import RetargetOptions, Weights, whole_body as retarget, solver
 from motion2robot.retarget.baseline import solve_ipopt
 from motion2robot.retarget.compiled import compiled_problem
 from motion2robot.robot import load_robot

@@ -48,7 +48,11 @@ def test_bad_files_give_one_line_errors(tmp_path, case):
         m = _motion()
         q = m.qpos.copy()
         q[2, 8] = np.nan
-        RobotMotion(q, 20.0, m.joint_names, "op3").save(p)
+        with pytest.raises(ValueError, match="refusing to write"):  # the writer never writes NaN (issue 20)
+            RobotMotion(q, 20.0, m.joint_names, "op3").save(p)
+        assert not p.exists() and not list(tmp_path.glob("*.part*"))
+        np.savez(p, qpos=q, fps=np.float64(20.0), joint_names=np.array(m.joint_names), robot=np.array("op3"),
+                 meta=np.array("{}"))
     with pytest.raises(InputFileError) as e:
         RobotMotion.load(p)
     msg = str(e.value)

@@ -241,7 +241,7 @@ def test_retargeter_runs_on_drafts(menagerie_env, tmp_path, generic_mjcf):
     about as well as onto the shipped one, and onto the generic humanoid within its limits."""
     from motion2robot.motion import read_motion
     from motion2robot.motion.ops import trim
-    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.retarget import RetargetOptions, whole_body as retarget
 
     human = trim(read_motion(MOTIONS / "humanml3d_joints" / "007005.npy")[0], 0, 10)
     opts = RetargetOptions(backend="vm", iterations=(4, 3))

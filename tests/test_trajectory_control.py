@@ -43,7 +43,7 @@ def test_omnicontrol_hint_becomes_the_canonical_control_path(tmp_path: Path) -> 
 
 @requires_shared
 def test_robot_error_against_the_requested_path(tmp_path: Path) -> None:
-    from motion2robot.retarget import retarget
+    from motion2robot.retarget import RetargetOptions, retarget
     from motion2robot.robot import load_robot
     from motion2robot.validate import CheckOptions, check
 
@@ -52,15 +52,17 @@ def test_robot_error_against_the_requested_path(tmp_path: Path) -> None:
     np.save(tmp_path / "path.npy", raw[:, 0, [0, 2]])  # (T, 2): the ground axes x, z of a y-up file
     robot = load_robot("op3")
     human = read_motion(tmp_path / "m.npy", trajectory=tmp_path / "path.npy")[0]
-    motion = with_control_path(retarget(human, robot), human)
+    whole = RetargetOptions(tempo="human", legs="whole")  # the robot walks the human's path
+    motion = with_control_path(retarget(human, robot, whole), human)
     c = check(motion, robot, CheckOptions(physics=False)).checks["trajectory"]
-    assert c["control_frames"] == human.num_frames
+    assert c["control_frames"] == motion.num_frames == human.num_frames  # every frame controlled
     assert c["control_mean_error_m"] == pytest.approx(c["mean_error_m"], abs=2e-4)  # the path is the pelvis's
     legs = motion.meta["scale"]["legs"]
     assert c["control_mean_error_human_m"] == pytest.approx(c["control_mean_error_m"] / legs, abs=2e-4)
     np.save(tmp_path / "off.npy", raw[:, 0, [0, 2]] + [0.5, 0.0])  # asked to walk 0.5 m to the side
     human2 = read_motion(tmp_path / "m.npy", trajectory=tmp_path / "off.npy")[0]
-    c2 = check(with_control_path(retarget(human2, robot), human2), robot, CheckOptions(physics=False)).checks["trajectory"]
+    c2 = check(with_control_path(retarget(human2, robot, whole), human2), robot,
+               CheckOptions(physics=False)).checks["trajectory"]
     assert 0.45 < c2["control_mean_error_human_m"] < 0.55
 
 
@@ -80,3 +82,20 @@ def test_a_trajectory_of_the_wrong_shape_is_one_line_exit_2(tmp_path: Path, caps
     assert main(["inspect", str(MOTIONS / "humanml3d_joints" / "007005.npy"), "--trajectory", str(tmp_path / "t.npy")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "root path" in err and str(tmp_path / "t.npy") in err
+
+
+@requires_shared
+def test_a_slowed_tempo_stretches_the_requested_path(tmp_path: Path) -> None:
+    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.robot import load_robot
+
+    raw = _raw()
+    np.save(tmp_path / "m.npy", raw)
+    np.save(tmp_path / "path.npy", raw[:, 0, [0, 2]])
+    human = read_motion(tmp_path / "m.npy", trajectory=tmp_path / "path.npy")[0]
+    motion = with_control_path(retarget(human, load_robot("op3"), RetargetOptions(tempo=2.0, legs="whole")), human)
+    xy = np.array(motion.meta["control_xy"], dtype=float)
+    assert len(xy) == motion.num_frames > human.num_frames
+    legs = motion.meta["scale"]["legs"]
+    np.testing.assert_allclose(xy[0], np.array(human.meta["control_path"][0][:2]) * legs, atol=1e-12)
+    np.testing.assert_allclose(xy[-1], np.array(human.meta["control_path"][-1][:2]) * legs, atol=1e-12)

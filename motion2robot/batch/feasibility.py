@@ -56,14 +56,14 @@ class FeasibilityJob:
         from motion2robot.validate import CheckOptions
 
         robot = load_robot(config.robot)
-        options = RetargetOptions()
+        options = RetargetOptions(**dict(getattr(config, "retarget_options", ()) or ()))
         _warm_up(robot, options)
         return FeasibilityState(robot, options, CheckOptions(physics=config.physics))
 
     @staticmethod
     def run(item: WorkItem, state: FeasibilityState, row: dict[str, Any], stage: list[str], config: Any) -> None:
         from motion2robot.motion import read_motion
-        from motion2robot.retarget import retarget
+        from motion2robot.retarget import retarget_and_check
         from motion2robot.validate import check
 
         t = row["timings"]
@@ -78,13 +78,17 @@ class FeasibilityJob:
         t["read_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "retarget"
         t0 = time.perf_counter()
-        from motion2robot.retarget.control_path import with_control_path
+        # the tempo/legs policy judges its attempts with these check options: its report is reused
+        motion, report = retarget_and_check(human, state.robot, state.retarget_options, state.check_options)
+        if human.meta.get("control_path"):  # a requested trajectory: judged again with it in the meta
+            from motion2robot.retarget.control_path import with_control_path
 
-        motion = with_control_path(retarget(human, state.robot, state.retarget_options), human)
+            motion, report = with_control_path(motion, human), None
         t["retarget_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "check"
         t0 = time.perf_counter()
-        report = check(motion, state.robot, state.check_options)
+        if report is None:
+            report = check(motion, state.robot, state.check_options)
         t["check_s"] = round(time.perf_counter() - t0, 4)
         row.update(feasible=bool(report.feasible),
                    failed_checks=[name for name, c in report.checks.items() if c.get("ok") is False],

@@ -29,8 +29,51 @@ except ImportError:  # pragma: no cover - Windows: no advisory lock
 
 
 def dumps_row(row: dict[str, Any]) -> str:
-    """One JSON line (no newline) with numpy values converted and NaN/inf as null."""
-    return json.dumps(plain(row, fallback_str=True), ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    """One JSON line (no newline) with numpy values converted and NaN/inf as null. A row holding
+    a file name that is not UTF-8 (Python keeps its bytes as lone surrogates) is written with
+    ASCII escapes (``\\udce9``): valid JSON and UTF-8, read back to the same name."""
+    data = plain(row, fallback_str=True)
+    text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        text = json.dumps(data, ensure_ascii=True, separators=(",", ":"), allow_nan=False)
+    return text
+
+
+def _lock_or_refuse(fh: Any, results: Path) -> None:
+    """An exclusive, non-blocking flock on ``fh``; UserError (and ``fh`` closed) if another batch
+    holds it."""
+    if fcntl is None:
+        return
+    try:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        fh.close()
+        raise UserError(f"{results}: another batch is writing to this file; wait for it to end "
+                        "or give a different --out") from None
+
+
+class batch_lock:
+    """Context manager: an exclusive lock on ``OUT.lock`` beside the results file, held for a whole
+    batch (plan, ``--redo`` rewrite, run), so that a second batch on the same file fails at once
+    before it reads or rewrites anything (the rewrite replaces the file, so a lock on the file
+    itself would not cover it)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.lock_path = self.path.with_name(self.path.name + ".lock")
+        self._fh: Any = None
+
+    def __enter__(self) -> "batch_lock":
+        self.lock_path.parent.mkdir(parents=True, exist_ok=True)
+        self._fh = open(self.lock_path, "a")  # noqa: SIM115 (closed in __exit__)
+        _lock_or_refuse(self._fh, self.path)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._fh is not None:
+            self._fh.close()  # releases the lock; the empty lock file stays (removing it would race)
 
 
 @dataclass(frozen=True)
@@ -128,13 +171,7 @@ class ResultWriter:
             raise InputFileError(f"{self.path}: is a folder; give --out a .jsonl file path")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = open(self.path, "a", encoding="utf-8")
-        if fcntl is not None:
-            try:
-                fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                self._fh.close()
-                raise UserError(f"{self.path}: another batch is writing to this file; wait for it to end "
-                                "or give a different --out") from None
+        _lock_or_refuse(self._fh, self.path)
         self.torn_bytes = _cut_torn_tail(self.path)
 
     def write(self, row: dict[str, Any]) -> None:

@@ -30,6 +30,7 @@ from numpy.lib import format as npformat
 from motion2robot.batch.layouts import duplicate_outputs
 from motion2robot.errors import UserError
 from motion2robot.motion.formats import SCAN_SUFFIXES, SINGLE_CLIP_SUFFIXES
+from motion2robot.util.files import special_file
 
 #: Extensions picked up when a folder is expanded (the format table's).
 MOTION_EXTENSIONS = SCAN_SUFFIXES
@@ -149,9 +150,12 @@ def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]
           ) -> Iterable[tuple[Path, bool, str | None]]:
     """Yield (file, named_explicitly, why it is skipped or None) in order."""
     for p in inputs:
-        if p.is_dir():
-            found = sorted(q for q in p.rglob("*") if q.is_file() and q.suffix.lower() in MOTION_EXTENSIONS)
-            copies = duplicate_outputs(found)
+        if p.is_dir() and p.suffix.lower() not in MOTION_EXTENSIONS:
+            # regular files, and anything else named like a motion (FIFO, device, broken link,
+            # a directory x.npy): those become error rows instead of vanishing
+            found = sorted(q for q in p.rglob("*") if q.suffix.lower() in MOTION_EXTENSIONS
+                           and (q.is_file() or special_file(q) is not None))
+            copies = duplicate_outputs(q for q in found if q.is_file())
             for f in found:
                 yield f, False, copies.get(f)
         elif p.suffix.lower() in MANIFEST_EXTENSIONS:
@@ -190,6 +194,9 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
             skipped.append((path, why))
             continue
         try:
+            special = special_file(f)
+            if special is not None:
+                raise UserError(f"{f}: {special}, not a motion file; remove it or give a regular file")
             if not f.is_file():
                 raise UserError(f"{f}: no such file; fix the manifest entry")
             try:

@@ -27,7 +27,8 @@ from motion2robot.batch.work import WorkItem, one_line
 class BatchConfig:
     """What every worker needs. robot: robot name or config path; physics: run the MuJoCo rollout;
     save_motions: folder for the retargeted motions (None: not saved); read_options: (name, value)
-    pairs passed to ``read_motion`` (format, fps, mean, std, units, up, name_map); job:
+    pairs passed to ``read_motion`` (format, fps, mean, std, units, up, name_map); retarget_options:
+    (name, value) pairs of RetargetOptions fields (tempo, legs, tempo_cap, balance); job:
     ``"module:attr"`` of the job object (None: :class:`~motion2robot.batch.feasibility.FeasibilityJob`)."""
 
     robot: str
@@ -35,6 +36,7 @@ class BatchConfig:
     save_motions: str | None = None
     read_options: tuple[tuple[str, Any], ...] = ()
     job: str | None = None
+    retarget_options: tuple[tuple[str, Any], ...] = ()
 
 
 #: At most this many distinct warnings are kept per row.

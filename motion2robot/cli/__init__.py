@@ -15,6 +15,7 @@ import pkgutil
 import sys
 import traceback
 import warnings
+from typing import NoReturn
 
 from motion2robot import __version__
 from motion2robot.errors import InputWarning, UserError
@@ -39,8 +40,18 @@ def _command_modules() -> list[str]:
     return sorted(names, key=lambda n: (key.get(n[4:].replace("_", "-"), len(key)), n))
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argparse parser whose usage errors are one line ``motion2robot: error: ...`` and exit 2
+    (subcommand parsers inherit it), like every other user error."""
+
+    def error(self, message: str) -> NoReturn:
+        sub = self.prog.split(" ", 1)[1] + ": " if " " in self.prog else ""
+        print(f"motion2robot: error: {sub}{' '.join(message.split())} (see '{self.prog} --help')", file=sys.stderr)
+        sys.exit(2)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="motion2robot",
         description=(
             "Turn generated human motion (HumanML3D, MDM, BVH, tensors) into humanoid robot motion: "
@@ -61,6 +72,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     warnings.showwarning = _show_warning
+    for stream in (sys.stdout, sys.stderr):  # a file name that is not UTF-8 prints as \xe9, never a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     try:
         from motion2robot.viz.gl import import_mujoco
 

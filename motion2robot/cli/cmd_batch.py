@@ -39,7 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "gives the share of edits that stay executable")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     from motion2robot.cli.read_options import add_read_options
+    from motion2robot.cli.retarget_options import add_retarget_options
 
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -47,7 +49,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
     from motion2robot.cli.read_options import read_args_kwargs
     from motion2robot.errors import UserError
     from motion2robot.robot import load_robot
@@ -60,8 +61,19 @@ def run(args: argparse.Namespace) -> int:
         from motion2robot.batch.ray_backend import import_ray
 
         import_ray()
+    from motion2robot.batch.results import batch_lock
+    from motion2robot.util.output import output_path
+
+    output_path(args.out, "results file")
     robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
     read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    with batch_lock(args.out):  # before the plan reads or --redo rewrites the results file
+        return _run_locked(args, robot, read_options, tqdm)
+
+
+def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
+    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
+
     expansion = None
     if args.pairs:
         from motion2robot.batch.pairs import expand_pairs
@@ -86,8 +98,11 @@ def run(args: argparse.Namespace) -> int:
     if plan.bad_lines:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
+    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
+    if args.tempo_cap is not None:
+        retarget += (("tempo_cap", args.tempo_cap),)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())),
+                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
                          job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,

@@ -10,6 +10,7 @@ import argparse
 
 from motion2robot.cli.motion_input import load_motion_input
 from motion2robot.cli.read_options import add_read_options
+from motion2robot.cli.retarget_options import add_retarget_options
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -27,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="write a self-contained HTML report (verdict, reasons, plots, key frames)")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--clip", type=int, help="clip index of a multi-clip human motion file")
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -34,6 +36,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from motion2robot.validate import CheckOptions, check, verdict_table
 
+    from motion2robot.util.output import output_path
+
+    for out, what in ((args.json, "JSON report"), (args.html, "HTML report")):
+        if out:
+            output_path(out, what)  # before the work: a directory here is a user error
     motion, robot, human = load_motion_input(args.file, args)
     report = check(motion, robot, CheckOptions(physics=args.physics))
     print(verdict_table(report))

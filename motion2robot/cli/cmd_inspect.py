@@ -67,9 +67,9 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from motion2robot.motion.plot import plot_motion
 
-        out = Path(args.plot)
-        if out.is_dir():
-            raise InputFileError(f"{out}: --plot needs a file name, not a directory; pass e.g. --plot clip.png")
+        from motion2robot.util.output import output_path
+
+        out = output_path(args.plot, "plot")
         m = clips[0]
         prompt = m.meta.get("prompt")
         title = f"{Path(args.file).name} clip {m.meta.get('clip', 0)}" + (f": {prompt}" if prompt else "")

@@ -1,7 +1,9 @@
 """``motion2robot retarget INPUT``: human motion -> robot motion ``.npz`` (casadi IK over all frames).
 
 Writes ``OUT.npz`` with exactly the keys qpos, fps, joint_names, robot, meta; with ``--clip all``
-on a multi-clip input, one ``OUT_clipN.npz`` per clip. Prints one summary line per clip.
+on a multi-clip input, one ``OUT_clipN.npz`` per clip. Prints one summary line per clip and the
+tempo/legs chosen. Exit 0; 1 when the tempo/legs policy found no attempt that passes the checks
+(the best attempt is still written); 2 for bad input.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from motion2robot.cli.read_options import add_read_options, read_args_kwargs
+from motion2robot.cli.retarget_options import add_retarget_options, retarget_options_from, tempo_line
 from motion2robot.errors import InputFileError, UserError
 
 
@@ -28,11 +31,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", help="output .npz (default: INPUT stem + '_<robot>.npz' beside the input)")
     p.add_argument("--fps", dest="out_fps", type=float, metavar="F",
                    help="frame rate of the robot motion (the human motion is resampled to it first; default: the file's)")
-    p.add_argument("--no-balance", dest="balance", action="store_false",
-                   help="do not keep the CoM over the support polygon (running, jumping)")
     p.add_argument("--iterations", type=_iterations, metavar="N[,M]", default=None,
                    help="Levenberg-Marquardt iterations of the free-feet and pinned stages (default 3,3: "
                         "the speed setting; 6,6 gives the per-frame IPOPT baseline's answer at about 80 %% of the speed)")
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -84,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     if len(clips) > 1 and clip is None:
         raise UserError(f"{args.input}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1} or --clip all")
     out = _output(args, robot.name)
-    options = RetargetOptions(balance=args.balance, fps=args.out_fps)
+    options = retarget_options_from(args, RetargetOptions(fps=args.out_fps))
     if args.iterations:
         options = replace(options, iterations=args.iterations)
     items = list(enumerate(clips))
@@ -94,10 +96,16 @@ def run(args: argparse.Namespace) -> int:
         items, say = tqdm(items, desc="retarget", unit="clip"), tqdm.write  # lines above the bar
     from motion2robot.retarget.control_path import with_control_path
 
+    status = 0
     for i, human in items:
         motion = with_control_path(retarget(human, robot, options), human)
         label = str(human.meta.get("clip", i))
         path = out if len(clips) == 1 else out.with_name(f"{out.stem}_clip{label}{out.suffix or '.npz'}")
         motion.save(path)
         say(summary(motion, f"clip {label}", path))
-    return 0
+        if tempo_line(motion):
+            say(f"  {tempo_line(motion)}")
+        if motion.meta.get("executable") is False:  # judged, and no tempo/legs within the cap passes
+            say(f"  not executable: written for inspection; `motion2robot check {path}` lists why")
+            status = 1
+    return status

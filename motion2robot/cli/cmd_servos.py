@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 
+from motion2robot.cli.numbers import SERVO_ID, number
 from motion2robot.errors import UserError
 from motion2robot.hardware.calibration import (
     Calibration,
@@ -36,12 +37,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                      "positions become the zero offsets written to the calibration file.")
     cal.add_argument("-o", "--output", required=True, help="calibration file to write (JSON)")
     reboot = sub.add_parser("reboot", help="reboot a servo (clears a hardware error shutdown)")
-    reboot.add_argument("--id", type=int, required=True, dest="servo_id")
+    reboot.add_argument("--id", type=SERVO_ID, required=True, dest="servo_id", help="servo ID, 0..252")
     off = sub.add_parser("off", help="torque off on every servo of the robot")
     wr = sub.add_parser("write", help="write one control-table register (by name) on servos, e.g. return_delay_time 0",
                         description="EEPROM registers (ID, baud, return delay time, limits...) need torque off.")
     wr.add_argument("--register", required=True, help="register name, e.g. return_delay_time")
-    wr.add_argument("--value", type=int, required=True, help="raw value in the register's unit")
+    wr.add_argument("--value", type=number("register units", -(2**31), 2**32 - 1, whole=True), required=True,
+                    help="raw value in the register's unit")
     wr.add_argument("--ids", help="IDs, e.g. 1-20 (default: every servo of the robot)")
     for sp, fn in ((scan, _scan), (cal, _calibrate), (reboot, _reboot), (off, _off), (wr, _write)):
         add_bus_options(sp)
@@ -66,6 +68,8 @@ def _parse_ids(text: str) -> list[int]:
             out += list(range(int(a), int(b or a) + 1))
     except ValueError:
         raise UserError(f"--ids: '{text}' is not like 1-20 or 1,3,5") from None
+    if not out or not all(0 <= i <= 252 for i in out):
+        raise UserError(f"--ids: '{text}' must name servo IDs in 0..252, like 1-20 or 1,3,5")
     return out
 
 
@@ -89,7 +93,10 @@ def _scan(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
+    from motion2robot.util.output import output_path
+
     robot, sm = _servo_map(args.robot)
+    output_path(args.output, "calibration file")
     target = target_from_args(args, sm)
     hinge = {n: i for i, n in enumerate(robot.joint_names)}
     nominal = {s.joint: float(robot.nominal_qpos[7 + hinge[s.joint]]) for s in sm.servos if s.joint in hinge}

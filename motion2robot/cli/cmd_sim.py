@@ -14,6 +14,7 @@ from pathlib import Path
 
 from motion2robot.cli.motion_input import load_motion_input
 from motion2robot.cli.read_options import add_read_options
+from motion2robot.cli.retarget_options import add_retarget_options
 from motion2robot.errors import UserError
 from motion2robot.viz.camera import MODES
 from motion2robot.viz.gl import prefer_headless
@@ -40,6 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--once", action="store_true", help="viewer: stop at the last frame instead of looping")
     p.add_argument("--speed", type=float, default=1.0, help="viewer playback speed (default 1)")
     p.add_argument("--pretty", action="store_true", help="video: shadows and reflections (slower)")
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 

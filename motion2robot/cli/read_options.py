@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import argparse
 
+from motion2robot.cli.numbers import FPS
+
 
 def add_read_options(p: argparse.ArgumentParser) -> None:
     """The reader options shared by every command that reads human motion."""
@@ -15,7 +17,7 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
         return f" (formats: {', '.join(formats_using(option))})"
 
     p.add_argument("--format", choices=FORMATS, metavar="NAME", help=format_help())
-    p.add_argument("--source-fps", dest="fps", type=float, metavar="FPS",
+    p.add_argument("--source-fps", dest="fps", type=FPS, metavar="FPS",
                    help="override the frame rate the file declares (e.g. 20 for IK-made BVH files that say 24)")
     p.add_argument("--mean", help="Mean.npy for normalised features" + used_by("mean"))
     p.add_argument("--std", help="Std.npy for normalised features" + used_by("std"))

@@ -2,10 +2,11 @@
 robot trajectory for every hinge whose body parts it did not change.
 
 The two human motions are compared on the frames both have, after resampling the edit to the
-source's rate (editors may change either). The source is retargeted as usual; the edit only over
-the frames where some part changed (plus the blend and a margin), with the source's scale; the two
-are then composed per hinge (:mod:`~motion2robot.edit.compose`). Nothing is re-solved after the
-composition. With ``balance_override``, balance may override the kept joints where it must: in
+source's rate (editors may change either). The source is retargeted as usual (its tempo and legs
+policies choose a slow-down and whole body or stance); the edit then with the source's scale, tempo
+and legs fixed, so both robot motions have the same frames; the two are composed per hinge
+(:mod:`~motion2robot.edit.compose`), the human frames' changes mapped onto the robot's frames.
+Nothing is re-solved after the composition. With ``balance_override``, balance may override the kept joints where it must: in
 the retargeted window, frames where the composed motion fails the (kinematic) balance check while
 both the source's and the edit's own robot motions pass it take every hinge and the root from the
 edit (with the same blend), and are reported. It is off by default: three more kinematic checks
@@ -30,8 +31,6 @@ from motion2robot.util.ranges import frame_ranges
 
 #: Seconds of blend between the source's and the edit's trajectory at each end of an edit.
 BLEND_SECONDS = 0.25
-#: Extra frames retargeted beyond the blend on each side of the edited frames.
-MARGIN_FRAMES = 10
 #: Mean relative bone-length difference above which two motions are different bodies.
 SKELETON_TOLERANCE = 0.15
 #: A robot hinge differs from the source's where it moved by more than this (rad).
@@ -74,6 +73,28 @@ def common_frames(source: HumanMotion, edit: HumanMotion, name: str = "the pair"
     return trim(source, 0, t), trim(edit, 0, t)
 
 
+def _fixed_like(opts, src: RobotMotion):
+    """The options with the tempo and legs the source's policies chose (so frames line up)."""
+    tempo = src.meta.get("tempo")
+    legs = (src.meta.get("fallback") or {}).get("mode") if isinstance(src.meta.get("fallback"), dict) else None
+    if legs not in ("whole", "stance"):
+        legs = opts.legs if getattr(opts, "legs", "auto") in ("whole", "stance") else "whole"
+    changes = {"legs": legs}
+    if isinstance(tempo, (int, float)):
+        changes["tempo"] = float(tempo)
+    return replace(opts, **changes)
+
+
+def _same_frames(q: np.ndarray, t: int) -> np.ndarray:
+    """(T', nq) -> (t, nq) by linear interpolation (quaternions renormalised); q itself if T' == t."""
+    if len(q) == t:
+        return q
+    u = np.linspace(0, len(q) - 1, t)
+    out = np.stack([np.interp(u, np.arange(len(q)), q[:, k]) for k in range(q.shape[1])], axis=1)
+    out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
+    return out
+
+
 def _balance_must_override(robot, src: RobotMotion, q_comp: np.ndarray, q_edit: np.ndarray,
                            window: tuple[int, int]) -> list[int]:
     """Frames of the window where the composed motion fails the balance check and neither the
@@ -112,18 +133,15 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
         opts = replace(opts, scale=auto_scale(source, robot))
     src = retarget(source, robot, opts)
     t_src = time.perf_counter() - t0
-    blend = int(round(blend_seconds * source.fps))
-    any_changed = np.any(list(changed.values()), axis=0)
+    blend = int(round(blend_seconds * src.fps))
+    t_r = src.num_frames
+    to_human = np.rint(np.arange(t_r) * (source.num_frames - 1) / max(t_r - 1, 1)).astype(int)
+    changed = {p: c[to_human] for p, c in changed.items()}  # on the robot's frames (tempo may stretch)
     q_edit = src.qpos.copy()
     window = None
-    if any_changed.any():
-        idx = np.flatnonzero(any_changed)
-        lo = max(0, int(idx[0]) - blend - MARGIN_FRAMES)
-        hi = min(source.num_frames, int(idx[-1]) + blend + MARGIN_FRAMES + 1)
-        if hi - lo < 2:
-            lo, hi = max(0, hi - 2), max(hi, 2)
-        window = (lo, hi)
-        q_edit[lo:hi] = retarget(trim(edit, lo, hi), robot, opts).qpos
+    if np.any(list(changed.values())):
+        window = (0, t_r)
+        q_edit = _same_frames(retarget(edit, robot, _fixed_like(opts, src)).qpos, t_r)
     parts = hinge_parts(robot)
     qpos, weights = compose(src.qpos, q_edit, changed, parts, blend)
     overridden: list[int] = []
@@ -135,7 +153,7 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
             qpos, weights = compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)
     elapsed = time.perf_counter() - t0
     human = {p: {"frames": frame_ranges(np.flatnonzero(c)), "max_m": float(dev[p][c].max()),
-                 "frames_changed": int(c.sum())} for p, c in changed.items() if c.any()}
+                 "frames_changed": int(c.sum())} for p, c in ((p, dev[p] > tolerance) for p in dev) if c.any()}
     robot_diff = {}
     for h, jn in enumerate(robot.joint_names):
         d = np.abs(qpos[:, 7 + h] - src.qpos[:, 7 + h])
@@ -147,6 +165,7 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
         robot_diff["root"] = {"frames": frame_ranges(np.flatnonzero(root > HINGE_EPS)),
                               "max_rad": float(root.max()), "frames_changed": int((root > HINGE_EPS).sum())}
     info = {"tolerance_m": tolerance, "blend_frames": blend, "retargeted_window": window,
+            "tempo": src.meta.get("tempo", 1.0), "robot_frames": t_r,
             "balance_override_frames": frame_ranges(overridden) if overridden else None,
             "frames": source.num_frames, "fps": source.fps, "parts": list(PARTS),
             "seconds": {"source": round(t_src, 3), "total": round(elapsed, 3)}}

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from motion2robot.hardware.virtual_servo import OVERLOAD
 
-FAULT_KINDS = ("drop_replies", "corrupt_crc", "alert", "vanish", "close_port")
+FAULT_KINDS = ("drop_replies", "corrupt_crc", "alert", "vanish", "close_port", "stall", "watchdog")
 _GOAL_ADDR = 116
 
 
@@ -18,7 +18,9 @@ class Fault:
     kind: "drop_replies" (servo stays silent for ``count`` replies, None = for ever),
     "corrupt_crc" (its next ``count`` status replies carry a wrong CRC), "alert" (Hardware
     Error Status |= ``bits``, default overload; torque cut), "vanish" (servo gone from the
-    bus), "close_port" (the chain closes the pty: the port dies under the host)."""
+    bus), "close_port" (the chain closes the pty: the port dies under the host), "stall" (the
+    servo stops moving, e.g. blocked by an obstacle, yet answers normally with no error bit),
+    "watchdog" (its Bus Watchdog trips now, as if it had missed packets)."""
 
     kind: str
     servo_id: int | None = None

@@ -52,6 +52,10 @@ class ChainServer:
                 s.hardware_fault(f.bits)
             elif f.kind == "vanish" and s:
                 s.alive = False
+            elif f.kind == "stall" and s:
+                s.stalled = True
+            elif f.kind == "watchdog" and s:
+                s.trip_watchdog()
             elif f.kind == "close_port" and self.master is not None:
                 os.close(self.master)
                 self.master = None

@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+from motion2robot.cli.numbers import BAUD, LATENCY_MS
 from motion2robot.errors import UserError
 from motion2robot.hardware.dynamixel_bus import DynamixelBus
 from motion2robot.hardware.virtual_chain import PTY_LATENCY_MS, VirtualChain
@@ -39,8 +40,8 @@ def add_bus_options(p: argparse.ArgumentParser, *, required: bool = True) -> Non
     g.add_argument("--virtual", action="store_true",
                    help="use a virtual servo chain (Protocol 2.0 on a pseudo-terminal) instead of hardware")
     g.add_argument("--port", metavar="DEV", help="serial device of the servo bus, e.g. /dev/ttyUSB0")
-    p.add_argument("--baud", type=int, help="bus baud rate (default: the robot config's, e.g. 2000000)")
-    p.add_argument("--latency-ms", type=float,
+    p.add_argument("--baud", type=BAUD, help="bus baud rate in bit/s (default: the robot config's, e.g. 2000000)")
+    p.add_argument("--latency-ms", type=LATENCY_MS,
                    help="USB latency timer the SDK timeouts assume (ms; default 1 for a port, set the adapter to "
                         "match; 4 for the virtual chain's pty)")
     p.add_argument("--no-wire-time", action="store_true", help="virtual chain: do not emulate byte times on the wire")

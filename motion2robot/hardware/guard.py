@@ -2,8 +2,14 @@
 
 Rules (all in servo ticks, so what is checked is exactly what goes on the wire):
 - a goal is inside the joint limits, rounded inwards to whole ticks;
-- a goal moves at most ``step`` ticks per control tick from the previous goal, where the step
-  comes from the joint velocity limit (``ramp=True``: from the slower ramp speed);
+- a goal moves no faster than the joint velocity limit (``ramp=True``: the slower ramp speed).
+  The speed is ``rate = v * ticks_per_rad / rate_hz`` ticks per control tick, usually not a
+  whole number: each joint earns ``rate`` ticks of budget per control tick (capped at
+  ``rate + 1``) and a move spends whole ticks of it. So over any ``n`` control ticks a goal moves
+  at most ``rate + 1 + rate * (n - 1) = rate * n + 1`` ticks: the limit times the
+  elapsed time plus at most one tick of quantisation, never accumulating; on average exactly the
+  limit. A limit below one tick per control tick (0.05 rad/s at 100 Hz is 0.033 ticks) moves one
+  tick every ``1 / rate`` control ticks;
 - a NaN/inf target holds that joint at its previous goal;
 - start is refused if the present pose is missing/non-finite, outside the limits by more than
   one step, or a servo reports an Alert / hardware error (:meth:`SafetyGuard.start`);
@@ -38,8 +44,11 @@ class SafetyGuard:
         self.lo = np.ceil(np.minimum(a, b) - 1e-9).astype(np.int64)
         self.hi = np.floor(np.maximum(a, b) + 1e-9).astype(np.int64)
         k = calibration.ticks_per_rad / rate_hz
-        self.step_max = np.maximum(1, np.floor(limits.velocity * k)).astype(np.int64)
-        self.step_ramp = np.maximum(1, np.floor(np.minimum(ramp_speed, limits.velocity) * k)).astype(np.int64)
+        self.rate_max = np.asarray(limits.velocity, dtype=np.float64) * k  # ticks per control tick
+        self.rate_ramp = np.minimum(ramp_speed, limits.velocity) * k
+        self.step_max = (np.floor(self.rate_max) + 1).astype(np.int64)  # most ticks in one control tick
+        self.step_ramp = (np.floor(self.rate_ramp) + 1).astype(np.int64)
+        self.budget = np.zeros(self.rate_max.shape)  # ticks each joint may still move (fractional)
         self.last: np.ndarray | None = None
 
     def _who(self, i: int) -> str:
@@ -57,19 +66,23 @@ class SafetyGuard:
             raise SafetyError(f"refusing to start: {self._who(i)} is at {q:.3f} rad, outside its limits; "
                               "move it into range by hand with torque off, or check the calibration", int(self.cal.ids[i]))
         self.last = np.clip(present.astype(np.int64), self.lo, self.hi)
+        self.budget = np.zeros(self.rate_max.shape)
         return self.last.copy()
 
     def next_goal(self, target: np.ndarray | None, ramp: bool = False) -> np.ndarray:
         """Goal ticks for this tick towards ``target`` (rad; None = hold)."""
         if self.last is None:
             raise RuntimeError("guard: start() first")
+        rate = self.rate_ramp if ramp else self.rate_max
+        self.budget = np.minimum(self.budget + rate, rate + 1.0)
         if target is None:
             return self.last.copy()
         t = self.cal.ticks_float(np.asarray(target, dtype=np.float64))
         bad = ~np.isfinite(t)
         t = np.where(bad, self.last, np.clip(np.rint(np.where(bad, 0.0, t)), self.lo, self.hi)).astype(np.int64)
-        step = self.step_ramp if ramp else self.step_max
+        step = np.floor(self.budget).astype(np.int64)
         goal = np.clip(self.last + np.clip(t - self.last, -step, step), self.lo, self.hi)
+        self.budget -= np.abs(goal - self.last)
         self.last = goal
         return goal.copy()
 

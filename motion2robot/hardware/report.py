@@ -11,7 +11,8 @@ from motion2robot.hardware.timing import LoopFigures
 @dataclass(frozen=True)
 class StreamReport:
     """What happened: loop figures, stop reason (end | interrupt | fault | refused), faults
-    (one-line messages), per-servo torque after the stop (True/False, None = unknown)."""
+    (one-line messages) and the first one's kind, per-servo torque after the stop (True/False,
+    None = unknown)."""
 
     figures: LoopFigures
     stop_reason: str
@@ -23,6 +24,8 @@ class StreamReport:
     fault_tick: int | None = None
     torque_off_errors: tuple[str, ...] = field(default_factory=tuple)
     recovered: int = 0  # bus failures recovered by a bounded retry (see telemetry events)
+    fault_kind: str | None = None  # first fault's kind: watchdog, divergence, hardware_error, comm, port, ...
+    watchdog_note: str = ""  # how the Bus Watchdog was chosen for the rate, when it was
 
     @property
     def ticks(self) -> int:
@@ -34,7 +37,9 @@ class StreamReport:
 
     def describe(self) -> str:
         lines = [f"stream: {self.stop_reason}" + (" (dry run)" if self.dry_run else ""), "loop: " + self.figures.describe()]
-        lines += [f"fault: {f}" for f in self.faults]
+        if self.watchdog_note:
+            lines.append(self.watchdog_note)
+        lines += [f"fault ({self.fault_kind}): {f}" for f in self.faults]
         if self.recovered:
             lines.append(f"bus: {self.recovered} failed transfers recovered by retry (see telemetry)")
         if self.torque_after:

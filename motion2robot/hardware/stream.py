@@ -4,6 +4,12 @@ Per tick (absolute deadlines ``t0 + k / rate``): interpolate the motion at the t
 :class:`~motion2robot.hardware.guard.SafetyGuard` turn it into goal ticks, sync-write the goals,
 sync-read present positions (fast sync read where supported) and their status bytes, write a
 telemetry line. Missed deadlines are counted as overruns and skipped (no catch-up burst).
+Whether the servos still obey is checked on every tick by
+:class:`~motion2robot.hardware.obedience.ObedienceMonitor` (bus silence longer than the Bus
+Watchdog, watchdog and Hardware Error Status read back, present diverging from the goal); each
+is a fault, and a stream with a fault never ends as "end". The Bus Watchdog is set from the rate
+(or refused) by :meth:`TorquePolicy.for_rate`. Waits are sliced so that a signal acts within
+20 ms at any rate.
 
 Phases: ramp_in (present pose -> first frame at the ramp speed), play, ramp_out (to the rest
 pose, if given), hold, then torque off. Ctrl-C/SIGTERM and faults (typed hardware errors,
@@ -15,11 +21,9 @@ the port is always closed.
 from __future__ import annotations
 
 import gc
-import signal
-import threading
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -29,8 +33,10 @@ from motion2robot.hardware.control_table import describe_hardware_error
 from motion2robot.hardware.errors import HardwareAlert, HardwareError, SafetyError
 from motion2robot.hardware.guard import SafetyGuard
 from motion2robot.hardware.limits import JointLimits
+from motion2robot.hardware.obedience import STATE_REGISTERS, ObedienceLimits, ObedienceMonitor, hardware_alert
 from motion2robot.hardware.policy import TorquePolicy
 from motion2robot.hardware.report import StreamReport
+from motion2robot.hardware.signals import StopSignals
 from motion2robot.hardware.telemetry import TelemetryWriter
 from motion2robot.hardware.timing import (
     LoopFigures,
@@ -42,9 +48,6 @@ from motion2robot.hardware.trajectory import joint_trajectory, sample
 from motion2robot.robot.servo_map import ServoMap
 from motion2robot.robot_motion import RobotMotion
 
-if TYPE_CHECKING:  # typing.Self is Python 3.11+
-    from typing import Self
-
 BusFactory = Callable[[], ServoBus]
 __all__ = ["BusFactory", "StreamReport", "Streamer", "sample", "stream_motion", "stream_to_virtual_chain"]
 
@@ -55,34 +58,13 @@ class _Stop(Exception):
         self.reason = reason
 
 
-class _Signals:
-    """SIGINT/SIGTERM set flags instead of raising while the loop runs (main thread only)."""
-
-    def __init__(self) -> None:
-        self.count = 0
-        self._old: dict[int, Any] = {}
-
-    def _handler(self, signum: int, frame: Any) -> None:
-        self.count += 1
-
-    def __enter__(self) -> Self:
-        if threading.current_thread() is threading.main_thread():
-            for s in (signal.SIGINT, signal.SIGTERM):
-                self._old[s] = signal.signal(s, self._handler)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for s, h in self._old.items():
-            signal.signal(s, h)
-
-
 class Streamer:
     """One streaming session; see :func:`stream_motion`."""
 
     def __init__(self, motion: RobotMotion, limits: JointLimits, servo_map: ServoMap, bus_factory: BusFactory | None,
                  *, rate_hz: float, loop: bool, policy: TorquePolicy, telemetry_path: str | Path | None,
                  offsets: Mapping[str, int] | None, rest_pose: np.ndarray | None, max_seconds: float | None,
-                 realtime: bool = False):
+                 realtime: bool = False, max_divergence: float | None = None):
         self.cal = Calibration.from_servo_map(servo_map, offsets)
         self.ids = [int(i) for i in self.cal.ids]
         self.limits = limits.select(self.cal.joints)
@@ -92,7 +74,13 @@ class Streamer:
         self.rate = float(rate_hz)
         self.dt = 1.0 / self.rate
         self.loop = loop
+        self.watchdog_note = ""
+        if bus_factory is not None:  # a dry run arms no watchdog: any rate will do
+            policy, self.watchdog_note = policy.for_rate(self.rate)
         self.policy = policy
+        wd_units = policy.watchdog_units if bus_factory is not None else 0
+        self.monitor = ObedienceMonitor(ObedienceLimits.derive(self.limits, self.cal, self.rate, wd_units, max_divergence),
+                                        self.cal, self.ids)
         self.guard = SafetyGuard(self.limits, self.cal, self.rate, policy.ramp_speed)
         self.bus_factory = bus_factory
         self.rest = None if rest_pose is None else np.asarray(rest_pose, dtype=np.float64)
@@ -102,6 +90,7 @@ class Streamer:
         self.tel: TelemetryWriter | None = None
         self.bus: ServoBus | None = None
         self.faults: list[str] = []
+        self.fault_kind: str | None = None
         self.fault_tick: int | None = None
         self.starts: list[float] = []
         self.overruns = 0
@@ -111,28 +100,28 @@ class Streamer:
         self.header = {"joints": list(self.cal.joints), "ids": self.ids, "rate_hz": self.rate,
                        "motion": {"robot": motion.robot, "frames": motion.num_frames, "fps": motion.fps,
                                   "source": str(motion.meta.get("source", ""))},
-                       "policy": policy.__dict__, "dry_run": bus_factory is None}
+                       "policy": policy.__dict__, "dry_run": bus_factory is None,
+                       "divergence_rad": [round(float(x), 4) for x in self.monitor.limits.divergence],
+                       "watchdog_note": self.watchdog_note}
 
     # -- set-up ---------------------------------------------------------------------------
     def _fault(self, err: BaseException) -> None:
         msg = str(err)
+        kind = getattr(err, "kind", "hardware")
         self.faults.append(msg)
         if self.fault_tick is None:
-            self.fault_tick = self.k
+            self.fault_tick, self.fault_kind = self.k, kind
         if self.tel:
-            self.tel.event("fault", msg, getattr(err, "servo_id", None), tick=self.k)
+            self.tel.event("fault", msg, getattr(err, "servo_id", None), tick=self.k, fault=kind)
 
     def _alert_error(self, ids: list[int]) -> HardwareAlert:
         i = ids[0]
         assert self.bus is not None
         try:
-            hes = self.bus.read(i, "hardware_error_status")
-            what = f"Hardware Error Status 0x{hes:02X} ({describe_hardware_error(hes)})"
+            hes: int | str = self.bus.read(i, "hardware_error_status")
         except HardwareError as err:
-            what = f"Alert bit set, Hardware Error Status unreadable ({err})"
-        j = self.cal.joints[self.ids.index(i)]
-        return HardwareAlert(f"servo {i} ({j}): {what}; the servo cut its torque: remove the cause, then "
-                             f"'motion2robot servos reboot --id {i}'", i)
+            hes = f"Alert bit set, Hardware Error Status unreadable ({err})"
+        return hardware_alert(i, self.cal.joints[self.ids.index(i)], hes)
 
     def _present(self) -> np.ndarray:
         assert self.bus is not None
@@ -173,7 +162,23 @@ class Streamer:
             raise SafetyError(f"refusing to start: torque on failed ({next(iter(failed.values()))})", next(iter(failed)))
         if self.policy.watchdog_units:
             self.bus.sync_write("bus_watchdog", {i: self.policy.watchdog_units for i in self.ids})
+        self.monitor.heard(clock())
         return goal0
+
+    def _check_state(self, registers: tuple[str, ...]) -> None:
+        """Read state registers back from every servo (Bus Watchdog, Hardware Error Status)."""
+        assert self.bus is not None
+        for reg in registers:
+            self.monitor.check_state(reg, self._sent(self.bus.sync_read, reg, self.ids).values)
+
+    def _sent(self, call: Callable[..., Any], *args: Any) -> Any:
+        """One bus transfer; afterwards, a bus possibly silent for longer than the watchdog since the
+        previous transfer began (the process stopped before or during this one) is a fault."""
+        start = clock()
+        out = call(*args)
+        self.monitor.check_silence(clock())
+        self.monitor.heard(start)
+        return out
 
     # -- loop -----------------------------------------------------------------------------
     def _tick(self, target: np.ndarray | None, ramp: bool, phase: str, t0: float) -> np.ndarray:
@@ -181,8 +186,12 @@ class Streamer:
         goal = self.guard.next_goal(target, ramp)
         present = None
         if self.bus is not None:
-            self.bus.sync_write("goal_position", dict(zip(self.ids, goal.tolist())))
-            present = self._present()
+            self._sent(self.bus.sync_write, "goal_position", dict(zip(self.ids, goal.tolist())))
+            present = self._sent(self._present)
+            spare = clock() < t0 + (self.k + 0.5) * self.dt  # half a period left: an extra read will not overrun
+            reg = self.monitor.state_register(len(self.starts), spare)
+            if reg:
+                self._check_state((reg,))
             for msg in self.bus.recoveries():
                 self.recovered += 1
                 if self.tel:
@@ -192,17 +201,20 @@ class Streamer:
             period = now - self.starts[-2] if len(self.starts) > 1 else 0.0
             self.tel.tick(self.k, now - t0, period, now - (t0 + self.k * self.dt), phase,
                           self.cal.to_radians(goal), None if present is None else self.cal.to_radians(present))
+        if present is not None:
+            self.monitor.check_divergence(goal, present)
         return goal
 
-    def _wait_next(self, t0: float) -> None:
+    def _wait_next(self, t0: float, interrupted: Callable[[], bool]) -> bool:
+        """Sleep to the next tick's deadline; False if ``interrupted()`` came first."""
         self.k += 1
         now = clock()
         if now > t0 + self.k * self.dt:
             self.overruns += 1
             self.k = int((now - t0) / self.dt) + 1
-        sleep_until(t0 + self.k * self.dt)
+        return sleep_until(t0 + self.k * self.dt, interrupted=interrupted)
 
-    def _run(self, sig: _Signals, t0: float) -> str:
+    def _run(self, sig: StopSignals, t0: float) -> str:
         """Ramp in, play, ramp out, hold on end; returns the stop reason or raises _Stop."""
         phase = "ramp_in"
         play_t0 = 0.0
@@ -234,17 +246,21 @@ class Streamer:
             elif phase == "ramp_out" and self.guard.reached(self.rest):
                 phase = "hold"
             elif phase == "hold" and hold_until is not None and now >= hold_until:
+                if self.bus is not None:
+                    self._check_state(STATE_REGISTERS)  # never "end" with servos that stopped obeying
                 return "end"
-            self._wait_next(t0)
+            until = hold_until
+            self._wait_next(t0, lambda: bool(sig.count) or (until is not None and clock() >= until))
 
-    def _hold(self, seconds: float, sig: _Signals, t0: float) -> None:
+    def _hold(self, seconds: float, sig: StopSignals, t0: float) -> None:
         """Keep the last goal for ``seconds`` (reading the bus); a 2nd Ctrl-C cuts it short."""
         if seconds <= 0:
             return
         first = sig.count
         end = clock() + seconds
         while clock() < end and sig.count <= first:
-            self._wait_next(t0)
+            if not self._wait_next(t0, lambda: sig.count > first or clock() >= end):
+                break
             self._tick(None, False, "hold", t0)
 
     def _torque_off(self) -> tuple[dict[int, bool | None], list[str]]:
@@ -276,7 +292,7 @@ class Streamer:
         gc.collect()
         gc.disable()  # a full collection can stall a tick for tens of ms; re-enabled below
         try:
-            with _Signals() as sig, realtime_priority(self.realtime) as rt:
+            with StopSignals() as sig, realtime_priority(self.realtime) as rt:
                 self.header["realtime"] = rt.granted
                 if self.telemetry_path:
                     self.tel = TelemetryWriter(self.telemetry_path, self.header)
@@ -305,18 +321,22 @@ class Streamer:
         finally:
             if gc_was_enabled:
                 gc.enable()
+            if reason == "end" and (self.faults or off_errors):  # never a success after a fault
+                reason = "fault"
+                self.fault_kind = self.fault_kind or "torque_off"
             figures = LoopFigures.from_starts(self.starts, self.dt, self.overruns)
             report = StreamReport(figures, reason, tuple(self.faults), torque_after, self.telemetry_path,
                                   self.bus_factory is None, self.k, self.fault_tick, tuple(off_errors),
-                                  self.recovered)
+                                  self.recovered, self.fault_kind, self.watchdog_note)
             if self.tel:
-                self.tel.stop(reason=reason, tick=self.k, fault_tick=self.fault_tick, faults=list(self.faults),
+                self.tel.stop(reason=reason, tick=self.k, fault_tick=self.fault_tick, fault=self.fault_kind,
+                              faults=list(self.faults),
                               torque={str(i): v for i, v in torque_after.items()}, torque_off_errors=off_errors,
                               figures=figures.__dict__)
                 self.tel.close()
         return report
 
-    def _safe_hold(self, seconds: float, sig: _Signals, t0: float) -> None:
+    def _safe_hold(self, seconds: float, sig: StopSignals, t0: float) -> None:
         try:
             self._hold(seconds, sig, t0)
         except HardwareError as err:
@@ -327,7 +347,8 @@ def stream_motion(motion: RobotMotion, limits: JointLimits, servo_map: ServoMap,
                   rate_hz: float = 100.0, loop: bool = False, dry_run: bool = False,
                   telemetry_path: str | Path | None = None, policy: TorquePolicy | None = None,
                   offsets: Mapping[str, int] | None = None, rest_pose: np.ndarray | None = None,
-                  max_seconds: float | None = None, realtime: bool = False) -> StreamReport:
+                  max_seconds: float | None = None, realtime: bool = False,
+                  max_divergence: float | None = None) -> StreamReport:
     """Stream ``motion`` to the servos of ``servo_map`` on the bus made by ``bus_factory``.
 
     ``limits``: joint limits (rad, rad/s) covering the servo map's joints; ``rest_pose``: angles
@@ -335,11 +356,14 @@ def stream_motion(motion: RobotMotion, limits: JointLimits, servo_map: ServoMap,
     ``offsets``: calibration zero offsets (ticks by joint); ``dry_run``: no bus at all, the
     guard and timing run as if the servos started at the first frame; ``max_seconds``: stop
     playing after this long (useful with ``loop``); ``realtime``: run the loop under SCHED_FIFO
-    when the OS allows it (root or CAP_SYS_NICE). Hardware problems before the loop starts
-    end with stop reason "refused"; the report never raises for hardware faults."""
+    when the OS allows it (root or CAP_SYS_NICE); ``max_divergence``: present-vs-goal distance
+    (rad) that is a fault, instead of the one derived from compliance and the guard's step (see
+    :mod:`motion2robot.hardware.obedience`). Hardware problems before the loop starts end with
+    stop reason "refused"; the report never raises for hardware faults. A Bus Watchdog that the
+    rate cannot keep fed is refused with UserError before anything is sent."""
     s = Streamer(motion, limits, servo_map, None if dry_run else bus_factory, rate_hz=rate_hz, loop=loop,
                  policy=policy or TorquePolicy(), telemetry_path=telemetry_path, offsets=offsets,
-                 rest_pose=rest_pose, max_seconds=max_seconds, realtime=realtime)
+                 rest_pose=rest_pose, max_seconds=max_seconds, realtime=realtime, max_divergence=max_divergence)
     return s.run()
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -16,14 +16,23 @@ if TYPE_CHECKING:  # typing.Self is Python 3.11+
 clock = time.perf_counter
 
 
-def sleep_until(deadline: float, spin_s: float = 0.0002) -> None:
-    """Sleep until ``deadline`` (``clock()`` seconds): OS sleep, then a short spin for precision."""
+#: Longest single OS sleep: a signal handler sets a flag that is looked at between slices.
+SLEEP_SLICE_S = 0.02
+
+
+def sleep_until(deadline: float, spin_s: float = 0.0002, interrupted: Callable[[], bool] | None = None,
+                slice_s: float = SLEEP_SLICE_S) -> bool:
+    """Sleep until ``deadline`` (``clock()`` seconds): OS sleep in slices of at most ``slice_s``,
+    then a short spin for precision. Returns False as soon as ``interrupted()`` is true (tested
+    between slices, so within ``slice_s`` of a signal), True at the deadline."""
     while True:
+        if interrupted is not None and interrupted():
+            return False
         rem = deadline - clock()
         if rem <= 0:
-            return
+            return True
         if rem > spin_s:
-            time.sleep(rem - spin_s)
+            time.sleep(min(rem - spin_s, slice_s))
 
 
 @dataclass(frozen=True)

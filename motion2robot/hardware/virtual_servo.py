@@ -31,6 +31,7 @@ class VirtualServo:
         self.t = t
         self.bus_seen = t
         self.alive = True  # False: vanished from the bus (no reply, ignores everything)
+        self.stalled = False  # True: blocked, the position no longer moves (no error reported)
 
     # -- memory -------------------------------------------------------------------------
     def _reset_memory(self, keep_eeprom: bool = False) -> None:
@@ -78,10 +79,9 @@ class VirtualServo:
         self.t = max(self.t, t)
         wd = self.mem[98]
         if self.torque and 0 < wd <= 127 and t - self.bus_seen > wd * 0.020:
-            self.mem[98] = 0xFF  # watchdog error state: stop where we are
-            self._set("goal_position", round(self.pos))
+            self.trip_watchdog()
         moving = False
-        if self.torque and dt > 0:
+        if self.torque and dt > 0 and not self.stalled:
             goal = self.get("goal_position")
             step = self.speed_ticks_per_s() * dt
             err = goal - self.pos
@@ -90,6 +90,11 @@ class VirtualServo:
         self._set("present_position", round(self.pos))
         self.mem[122] = 1 if moving else 0
         self._set("realtime_tick", int(t * 1000) % 32768)
+
+    def trip_watchdog(self) -> None:
+        """Bus Watchdog error state: stop where we are, refuse goals until 98 is written 0."""
+        self.mem[98] = 0xFF
+        self._set("goal_position", round(self.pos))
 
     def heard(self, t: float) -> None:
         """The servo was addressed at time ``t`` (feeds the Bus Watchdog)."""

@@ -11,6 +11,8 @@ Positions come out in the file's own axes and units.
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +20,8 @@ import re
 
 import numpy as np
 
-from motion2robot.motion.checks import fail
+from motion2robot.errors import InputWarning
+from motion2robot.motion.checks import MAX_COORDINATE, fail
 
 
 @dataclass(frozen=True)
@@ -111,8 +114,10 @@ def _parse_hierarchy(path: Path, tokens: list[str]) -> tuple[BvhSkeleton, int]:
     return skel, i
 
 
-def parse_bvh(path: str | Path) -> BvhClip:
-    """Parse a BVH file; one-line InputFileError for any structural problem."""
+def parse_bvh(path: str | Path, strict: bool = False) -> BvhClip:
+    """Parse a BVH file; one-line InputFileError for any structural problem. A 'Frames:' line that
+    disagrees with the rows is a warning (:class:`InputWarning`; the rows are read), an error if
+    ``strict``."""
     path = Path(path)
     text = path.read_text(errors="replace")
     if not text.strip():
@@ -138,12 +143,24 @@ def parse_bvh(path: str | Path) -> BvhClip:
         raise fail(path, "has non-numeric values in the MOTION data", "re-export the BVH") from None
     n_ch = skel.num_channels
     rows = data.size // n_ch if n_ch else 0
-    if n_frames > rows or (n_ch and data.size % n_ch):
-        raise fail(path, f"is truncated: 'Frames: {n_frames}' but the data holds {data.size / max(n_ch, 1):.6g} "
-                         f"frames of {n_ch} channels", "re-export the file or fix its 'Frames:' line")
-    if not frame_time > 0:
+    if not n_ch or data.size % n_ch:
+        raise fail(path, f"is truncated: the MOTION data holds {data.size / max(n_ch, 1):.6g} frames of {n_ch} "
+                         f"channels ('Frames: {n_frames}'), not a whole number", "re-export the file")
+    if n_frames != rows:  # trust the data, not the header, and say so
+        what = f"'Frames: {n_frames}' but the MOTION data holds {rows} frames of {n_ch} channels"
+        if strict or n_frames < 0:
+            raise fail(path, what, "fix the 'Frames:' line" + (" (or drop --strict to read the rows)" if strict else ""))
+        warnings.warn(InputWarning(f"{path}: {what}; reading all {rows} frames (--strict refuses such files)"),
+                      stacklevel=2)
+    if not (math.isfinite(frame_time) and frame_time > 0):
         raise fail(path, f"has Frame Time {frame_time}", "fix 'Frame Time:' or pass --source-fps")
-    values = data[: n_frames * n_ch].reshape(n_frames, n_ch)
+    values = data.reshape(rows, n_ch)
+    bad = ~np.isfinite(values) | (np.abs(values) > MAX_COORDINATE)
+    if bad.any():
+        t, c = (int(x) for x in np.argwhere(bad)[0])
+        raise fail(path, f"frame {t}, channel {c + 1} of the MOTION data is {values[t, c]!r} (not finite or beyond "
+                         f"{MAX_COORDINATE:g}; {int(bad.any(axis=1).sum())} frame(s) in all)",
+                   "fix or trim those frames in the source")
     return BvhClip(skel, frame_time, values)
 
 

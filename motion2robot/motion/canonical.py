@@ -17,9 +17,10 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from motion2robot.motion.checks import check_frames, fail
+from motion2robot.motion.checks import check_fps, check_frames, check_magnitude, fail, numeric_positions
 from motion2robot.motion.height import stature
-from motion2robot.motion.human import KP, HumanMotion
+from motion2robot.motion.plausibility import warn_implausible
+from motion2robot.motion.human import KP, SMPL22, HumanMotion
 
 #: Foot keypoints used for the floor and contacts: ankles and toes.
 FOOT_KPS = (KP["left_ankle"], KP["right_ankle"], KP["left_foot"], KP["right_foot"])
@@ -146,8 +147,10 @@ def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str
     up / units: None to detect; ``*_source`` says where a given value came from ("format",
     "--up", ...) and is recorded in meta; source_fps: the file's own rate when ``fps`` overrides it.
     """
-    pos = np.asarray(positions, dtype=np.float64)
+    pos = numeric_positions(path, positions)
+    fps = check_fps(path, fps, "the frame rate")
     check_frames(path, pos)
+    check_magnitude(path, pos, SMPL22 if pos.ndim == 3 and pos.shape[1] == len(SMPL22) else None)
     if up is None:
         up, agree = detect_up(pos)
         up_source = f"detected: head above feet along {up} in {agree:.0%} of frames"
@@ -171,6 +174,7 @@ def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str
                    "pass the right --units (m, cm, mm, inch, cmu) or --up if the skeleton lies on its side")
     steps: dict = {}
     pos = _canonical_positions_inplace(pos, steps)  # pos is our own array (made by _rotate)
+    warn_implausible(path, pos, fps)
     matrix = rot_z(-steps["yaw"]) @ up_rotation(up) * UNIT_SCALE[units]
     offset = [-steps["origin"][0], -steps["origin"][1], -steps["floor"]]
     info = {"up_axis": up, "up_axis_source": up_source, "units": units, "units_source": units_source,

@@ -19,6 +19,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 from motion2robot.motion.probe import Probe
 from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header
+from motion2robot.util.files import special_file
 
 _NPY_FORMATS = tuple(f.name for f in TABLE if f.npy)
 
@@ -34,9 +35,16 @@ def _format_of_shape(path: Path, shape: tuple[int, ...], dtype: np.dtype) -> str
                      "(T, 263) features or MDM (N, 22, 3, T))", "check the array, or pass --format")
 
 
+def _refuse_special(path: Path) -> None:
+    what = special_file(path)
+    if what is not None and what != "is a directory":
+        raise fail(path, f"{what}, not a motion file", "give a regular motion file")
+
+
 def detect_format(path: str | Path) -> str:
     """Format name of a file or folder (see :data:`~motion2robot.motion.formats.TABLE`)."""
     path = Path(path)
+    _refuse_special(path)
     if path.is_dir():
         files = _folder_files(path)
         return detect_format(files[0])
@@ -150,7 +158,8 @@ def read_motion(path: str | Path, *, format: str | None = None, clip: int | None
 
 def _read_any(path: Path, format: str | None, opts: ReadOptions) -> list[HumanMotion]:
     clip = opts.clip
-    fast = _read_npy_once(path, format, opts)  # a .npy file: no stat calls, one open
+    _refuse_special(path)  # a FIFO would block the open below for ever
+    fast = _read_npy_once(path, format, opts)  # a .npy file: one open
     if fast is not None:
         return fast
     if path.is_dir():

@@ -14,7 +14,7 @@ import numpy as np
 
 from motion2robot.motion import features as F
 from motion2robot.motion.canonical import canonicalize
-from motion2robot.motion.checks import check_frames, fail
+from motion2robot.motion.checks import check_fps, check_frames, fail
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 from motion2robot.motion.prompts import prompts_beside
@@ -28,6 +28,8 @@ NORMALISED_RMS = 5.0
 
 
 def _pick(items: list[Any], clip: int | None, path: Path) -> list[tuple[int, Any]]:
+    if not items:
+        raise fail(path, "holds no motion clips (its batch dimension is 0)", "give a file with at least one clip")
     if clip is None:
         return list(enumerate(items))
     if not -len(items) <= clip < len(items):
@@ -86,6 +88,8 @@ def _stats(path: Path, which: str, given: Any, dim: int) -> np.ndarray | None:
     if not isinstance(a, np.ndarray) or a.shape != (dim,):
         raise fail(p, f"has shape {getattr(a, 'shape', type(a).__name__)}, expected ({dim},)",
                    f"give the {which}.npy matching {dim}-d features")
+    if a.dtype.kind not in "fiu" or not np.all(np.isfinite(a)):
+        raise fail(p, f"holds {a.dtype} values that are not all finite numbers", f"give the data set's {which}.npy")
     return a.astype(np.float64)
 
 
@@ -97,7 +101,8 @@ def denormalise(path: Path, feat: np.ndarray, opts: ReadOptions) -> tuple[np.nda
     if (mean is None) != (std is None):
         raise fail(path, "needs both Mean.npy and Std.npy to denormalise", "pass --mean and --std together")
     if mean is not None:
-        rms = float(np.sqrt(np.mean(((feat - mean) / std) ** 2)))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a zero Std entry: inf, not a warning
+            rms = float(np.sqrt(np.mean(((feat - mean) / std) ** 2)))
         if rms < NORMALISED_RMS:
             return feat, f"raw (|x - Mean|/Std has RMS {rms:.2f}; statistics not applied)"
         return feat * std + mean, f"normalised (RMS {rms:.1f} as raw), denormalised with the given/adjacent Mean/Std"
@@ -152,7 +157,7 @@ def read_mdm_array(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[Human
 def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotion]:
     """MDM results dict: sample i = motion[i, :, :, :lengths[i]] as (T, 22, 3), prompt text[i]."""
     if not isinstance(obj, dict) or "motion" not in obj:
-        keys = sorted(obj) if isinstance(obj, dict) else type(obj).__name__
+        keys = sorted(map(repr, obj)) if isinstance(obj, dict) else type(obj).__name__
         raise fail(path, f"holds {keys}, not an MDM results dict with 'motion'",
                    "give MDM's results.npy (motion, text, lengths)")
     motion = obj["motion"]
@@ -163,8 +168,19 @@ def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotio
         return read_features(path, clips, opts)
     clips = _mdm_layout(path, motion)
     n, t = clips.shape[:2]
-    lengths = np.asarray(obj.get("lengths", np.full(n, t))).astype(np.int64).reshape(-1)
+    try:
+        raw_lengths = np.asarray(obj.get("lengths", np.full(n, t)))
+        lengths = raw_lengths.astype(np.int64).reshape(-1)
+        if raw_lengths.dtype.kind == "f" and not np.array_equal(lengths, raw_lengths.reshape(-1)):
+            raise ValueError("not whole numbers")
+    except (TypeError, ValueError, OverflowError):
+        raise fail(path, f"'lengths' is {obj.get('lengths')!r:.60}, not whole frame counts",
+                   "re-save the results with integer lengths") from None
     text = obj.get("text", [None] * n)
+    if isinstance(text, (str, bytes)) or not isinstance(text, (list, tuple, np.ndarray)) or \
+            not all(x is None or isinstance(x, (str, np.str_)) for x in text):
+        raise fail(path, f"'text' is {text!r:.60}, not a list of prompts (strings)",
+                   "re-save the results with one prompt string per sample")
     if lengths.size != n or len(text) != n:
         raise fail(path, f"has {n} motions but {lengths.size} lengths and {len(text)} prompts",
                    "re-save the results with matching motion/text/lengths")
@@ -190,13 +206,18 @@ def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotio
 def read_npz(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     """.npz with a 'joints' or 'positions' array ((T, 22, 3) or a batch) and 'fps'. Axes and units
     are detected unless --up/--units are given (no convention is implied by .npz)."""
-    with np.load(path, allow_pickle=False) as z:
-        key = next((k for k in ("joints", "positions") if k in z.files), None)
-        if key is None:
-            raise fail(path, f"has no 'joints' or 'positions' array (keys: {', '.join(z.files) or 'none'})",
-                       "save positions as joints=(T, 22, 3) with fps=...")
-        arr = z[key]
-        fps = float(z["fps"]) if "fps" in z.files else None
+    from motion2robot.motion.archive import read_npz_members
+
+    members = read_npz_members(path, ("joints", "positions", "fps"))
+    key = next((k for k in ("joints", "positions") if k in members), None)
+    if key is None:
+        raise fail(path, f"has no 'joints' or 'positions' array (keys: {', '.join(members.names) or 'none'})",
+                   "save positions as joints=(T, 22, 3) with fps=...")
+    arr = members[key]
+    fps = None
+    if "fps" in members:
+        f = members["fps"]
+        fps = check_fps(path, f.item() if f.size == 1 and f.dtype.kind in "fiub" else f, "its 'fps' entry")
     if opts.fps is None and fps is None:
         raise fail(path, "has no 'fps' entry", "save fps=... in the .npz or pass --source-fps")
     clips = _joints_clips(path, arr)

@@ -52,7 +52,7 @@ def read_bvh(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     """One clip per BVH file (``clip`` may only be 0)."""
     if opts.clip not in (None, 0, -1):
         raise fail(path, f"holds one clip, --clip {opts.clip} is out of range", "pass --clip 0 or omit it")
-    clip = parse_bvh(path)
+    clip = parse_bvh(path, strict=bool(getattr(opts, "strict", False)))
     names = list(clip.skeleton.names)
     sk = clip.skeleton
     children = {p for p in sk.parents if p >= 0}

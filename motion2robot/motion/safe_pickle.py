@@ -154,6 +154,8 @@ def read_npy_header(path: str | Path, fh: BinaryIO) -> NpyHeader:
             raise ValueError(f"unsupported .npy version {version}")
     except (ValueError, SyntaxError, tokenize.TokenError) as err:
         raise fail(path, f"has a broken .npy header ({err})", "re-export the file") from None
+    if not all(isinstance(n, int) and n >= 0 for n in shape):
+        raise fail(path, f"has a broken .npy header (shape {tuple(shape)} has negative sizes)", "re-export the file")
     return NpyHeader(tuple(shape), bool(fortran), dtype, fh.tell())
 
 

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from motion2robot.errors import SolverError
-from motion2robot.motion.human import KP, HumanMotion
+from motion2robot.errors import SolverError, UserError
+from motion2robot.motion.human import KP, SMPL22, HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget import native
 from motion2robot.retarget.anchor_gap import foot_capsules, separate_anchors
@@ -43,15 +43,31 @@ from motion2robot.retarget.constraints import (
 )
 from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted
 from motion2robot.retarget.costs import FRAME_TERMS, Weights
+from motion2robot.retarget.finite import check_solution, check_targets
 from motion2robot.retarget.problem import HMAX
+from motion2robot.retarget.executable import plan
 from motion2robot.retarget.root_pass import root_shift
 from motion2robot.retarget.scale import Scale, auto_scale, scaled_keypoints
-from motion2robot.retarget.smoothing import root_acceleration_target, servo_targets, smooth_hinges, smooth_to_targets
-from motion2robot.retarget.solver import correct, objective
+from motion2robot.retarget.smoothing import (
+    root_acceleration_target,
+    servo_targets,
+    smooth_hinges,
+    smooth_jointly,
+    smooth_to_targets,
+)
+from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, objective
 from motion2robot.retarget.targets import frame_params, initial_qpos
+from motion2robot.retarget.tempo import DEFAULT_CAP, parse_cap, parse_tempo
+from motion2robot.retarget.zmp_plan import MIN_SHIFT, cart_table_shift, com_boxes, multibody_zmp
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
+#: fps at which the temporal weights apply as given (see ``_rate_weights``).
+TEMPORAL_REFERENCE_FPS = 20.0
+#: Rounds of the ZMP planning stage at most.
+ZMP_ROUNDS = 2
+#: What ``legs`` may be.
+LEGS = ("auto", "whole", "stance")
 #: Factor on the floor weight in the first (free-feet) stage.
 STAGE1_SOFTENING = 1e-3
 #: m of clearance kept between the feet's capsules (besides the collision MARGIN) when anchoring.
@@ -85,7 +101,14 @@ class RetargetOptions:
     foot alone in contact keeps its yaw (no spinning stance foot). Off by default: it stops the
     spin, but turns the body off the human's heading (walk: heading error 2 -> 11 deg, path error
     3 -> 20 cm) and its easing back makes both feet slide a little in some double-support frames
-    of quasi-static clips (bandai byebye, an MDM throw), which then fail the ground check."""
+    of quasi-static clips (bandai byebye, an MDM throw), which then fail the ground check.
+    dynamic_balance: with balance, a ZMP planning stage after the whole-body solve keeps the
+    multi-body ZMP inside the shrunk support polygons (:mod:`~motion2robot.retarget.zmp_plan`).
+    tempo: "human" | "similar" | "auto" | a slow-down factor (:mod:`~motion2robot.retarget.tempo`);
+    tempo_cap: the slowest ``auto`` may go; legs: "whole" | "stance" | "auto" (whole body, the
+    stance alternative of :mod:`~motion2robot.retarget.stance`, or whole body unless only the
+    stance passes); with "auto" in either, the result is judged by ``check`` and the policy of
+    :mod:`~motion2robot.retarget.executable` picks the attempt."""
 
     balance: bool = True
     fps: float | None = None
@@ -100,6 +123,16 @@ class RetargetOptions:
     smoothing: bool = True
     root_pass: bool = True
     hold_stance_yaw: bool = False
+    dynamic_balance: bool = True
+    tempo: str | float = "auto"
+    tempo_cap: float = DEFAULT_CAP
+    legs: str = "auto"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "tempo", parse_tempo(self.tempo))
+        object.__setattr__(self, "tempo_cap", parse_cap(self.tempo_cap))
+        if self.legs not in LEGS:
+            raise UserError(f"--legs {self.legs!r}: choose one of {', '.join(LEGS)}")
 
 
 def _points(problem: CompiledProblem, Q: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -120,7 +153,7 @@ def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.nda
     contact = np.zeros(T)
     if soles is not None:
         dz = np.abs(corners[..., 2]).max(axis=-1)                                   # (T, 2)
-        dxy = np.linalg.norm(corners[..., :2].mean(axis=2) - np.nan_to_num(soles)[..., :2].mean(axis=2), axis=-1)
+        dxy = np.linalg.norm(corners[..., :2] - np.nan_to_num(soles)[..., :2], axis=-1).max(axis=-1)  # (T, 2)
         contact = np.where(labels, np.maximum(dz, dxy), 0.0).max(axis=1)
     balance = np.where(balanced, np.maximum(0.0, -support_margin(com[:, :2], planes)), 0.0)
     coll = np.maximum(0.0, -gaps.min(axis=1)) if gaps.shape[1] else np.zeros(T)
@@ -133,24 +166,110 @@ def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.nda
     }
 
 
+def _rate_weights(w: Weights, fps: float) -> Weights:
+    """The temporal weights act on per-frame differences, which shrink as the rate grows: scaled by
+    (fps / TEMPORAL_REFERENCE_FPS)^2 so a finer output rate does not loosen them (at 100 fps
+    unscaled, a byebye's peak joint acceleration grew 1.6x over the native 30 fps; scaled, 0.6x)."""
+    k = (fps / TEMPORAL_REFERENCE_FPS) ** 2
+    return replace(w, velocity=w.velocity * k, acceleration=w.acceleration * k)
+
+
+def _require_solvable(human: HumanMotion) -> None:
+    """SolverError (a user error) for clips no stage can retarget."""
+    where = human.meta.get("source", "the motion")
+    if human.num_frames < 2:
+        raise SolverError(f"{where}: the clip has {human.num_frames} frame; retargeting needs at least 2 frames "
+                          "(velocity limits, contacts)")
+    if not np.all(np.isfinite(human.positions)):
+        raise SolverError(f"{where}: keypoints contain NaN/inf; fix or trim the clip")
+
+
+def _smooth_configuration(Q: np.ndarray, robot: Robot, fps: float, targets: tuple[np.ndarray, np.ndarray],
+                          root_target: float | None) -> np.ndarray:
+    """:func:`~motion2robot.retarget.smoothing.smooth_jointly` over root position, root quaternion
+    (renormalised) and hinges, then the exact joint limits and velocity clamp."""
+    v, a = targets
+    racc = root_target if root_target is not None else np.inf
+    vt = np.concatenate([np.full(7, np.inf), v])
+    at = np.concatenate([np.full(3, racc), np.full(4, np.inf), a])
+    out = smooth_jointly(Q, vt, at, fps)
+    out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
+    out[:, 7:] = np.clip(clamp_velocity(out[:, 7:], robot.velocity_limit, fps), robot.lower, robot.upper)
+    return out
+
+
+def _dynamic_balance(problem: CompiledProblem, kp: np.ndarray, labels: np.ndarray, soles: np.ndarray,
+                     planes: np.ndarray, support: np.ndarray, Q: np.ndarray, robot: Robot, fps: float,
+                     max_step: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The ZMP planning stage (:mod:`~motion2robot.retarget.zmp_plan`): up to ZMP_ROUNDS rounds of
+    (measure the multi-body ZMP, plan a CoM shift by the cart-table QP, pin the CoM to the
+    shifted path and project the trajectory onto it and the other hard constraints). Kept only if
+    it brings the ZMP closer to the soles without leaving any hard constraint (contacts, floor,
+    self-collision) violated; otherwise the trajectory is returned as it came (``applied`` False)."""
+    def outside(zmp: np.ndarray) -> float:
+        return float(np.max(np.maximum(0.0, -support_margin(np.nan_to_num(zmp), planes)) * support, initial=0.0))
+
+    figures = {"applied": False, "rounds": 0, "max_shift_m": 0.0}
+    Q0, violation = Q, np.zeros(len(Q))
+    zmp, com = multibody_zmp(Q, fps, robot)
+    figures["zmp_outside_before_m"] = before = outside(zmp)
+    for _ in range(ZMP_ROUNDS):
+        d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps)
+        if np.abs(d).max() < MIN_SHIFT:
+            break
+        boxes = com_boxes(com[:, :2] + d, support, planes)
+        P3 = frame_params(problem.spec, kp, labels, soles, boxes, support)
+        Q, violation = correct(problem, P3, Q, robot.lower, robot.upper, max_step, 2, extra=EXTRA_CORRECTIONS)
+        Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, fps)
+        figures["rounds"] += 1
+        figures["max_shift_m"] = max(figures["max_shift_m"], float(np.abs(d).max()))
+        zmp, com = multibody_zmp(Q, fps, robot)
+    figures["zmp_outside_after_m"] = after = outside(zmp)
+    # the box rows are part of the violation; the other hard rows must hold as before
+    P_plain = frame_params(problem.spec, kp, labels, soles, planes, None)
+    hard = problem.violation_eval(len(Q))(Q, P_plain)[0].ravel() if figures["rounds"] else violation
+    if figures["rounds"] and after < before and float(np.max(hard, initial=0.0)) <= EXTRA_TOLERANCE:
+        figures["applied"] = True
+        return Q, figures
+    figures["zmp_outside_after_m"] = before
+    return Q0, figures
+
+
 def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:
-    """Retarget a canonical human motion onto ``robot``; the result's meta carries the scale,
-    the contacts used, the scaled human root path and the solver's figures."""
+    """Retarget a canonical human motion onto ``robot`` at the tempo and with the legs the options
+    ask for (by default the first that passes ``check``: see
+    :mod:`~motion2robot.retarget.executable`); the result's meta carries the scale, the contacts
+    used, the scaled human root path, the solver's figures, the tempo and the fallback taken."""
+    return retarget_and_check(human, robot, options)[0]
+
+
+def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None,
+                       check_options: object | None = None) -> tuple[RobotMotion, object | None]:
+    """:func:`retarget`, also returning the ``check`` report of the chosen attempt (None when the
+    policy judged nothing: fixed tempo and legs); ``check_options`` are the judge's."""
+    opt = options or RetargetOptions()
+    if opt.fps is not None and abs(opt.fps - human.fps) > 1e-9:
+        human = resample(human, opt.fps)
+    _require_solvable(human)
+    inner = replace(opt, fps=None)
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, lambda h: whole_body(h, robot, inner), check_options)
+
+
+def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:
+    """The whole-body kinematic pipeline (steps 1-6 of the module text) on ``human`` as given."""
     opt = options or RetargetOptions()
     if opt.fps is not None and abs(opt.fps - human.fps) > 1e-9:
         human = resample(human, opt.fps)
     T = human.num_frames
     where = human.meta.get("source", "the motion")
-    if T < 2:
-        raise SolverError(f"{where}: the clip has {T} frame; retargeting needs at least 2 frames (velocity limits, contacts)")
-    if not np.all(np.isfinite(human.positions)):
-        raise SolverError(f"{where}: keypoints contain NaN/inf; fix or trim the clip")
+    _require_solvable(human)
     t_all = time.perf_counter()
     problem = compiled_problem(robot, opt.backend)
     native.library()  # the smoothing/clamp kernels: built on first use, like the problem's code
-    spec, w = problem.spec, opt.weights
+    spec, w = problem.spec, _rate_weights(opt.weights, human.fps)
     scale = opt.scale or auto_scale(human, robot)
     kp = scaled_keypoints(human.positions, scale)
+    check_targets(kp, SMPL22, where)
     if opt.contacts:
         labels, label_source = contact_labels(human)
         heel_up = int(labels.sum())
@@ -206,6 +325,15 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
         Q, _ = correct(problem, P2, Q, lo, hi, max_step, 2, free_at_bounds=rounds > opt.corrections,
                        extra=EXTRA_CORRECTIONS)
         Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps)
+    if opt.smoothing:  # one filter for root and hinges together removes the solves' kinks; a last
+        # projection takes the planted soles back where the filter moved them (to second order)
+        Q = _smooth_configuration(Q, robot, human.fps, targets, root_target)
+        Q, _ = correct(problem, P2, Q, lo, hi, max_step, 1, extra=EXTRA_CORRECTIONS)
+        pts = None
+    zmp_figures = None
+    if opt.balance and opt.dynamic_balance and opt.contacts:  # the ZMP, not only the CoM, inside the soles
+        Q, zmp_figures = _dynamic_balance(problem, kp, labels, soles, planes, support, Q, robot, human.fps, max_step)
+        pts = None
     pts = pts or _points(problem, Q)
     shift = None
     if opt.root_pass:  # joints final: move only the root onto the floor / stance anchors
@@ -214,6 +342,7 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
         Q = shift.apply(Q)  # a rigid root motion moves every point with it; the capsule gaps stay
         pts = (shift.points(pts[0]), shift.points(pts[1]), shift.points(pts[2][:, None])[:, 0], pts[3])
     solve_s = time.perf_counter() - t_solve
+    check_solution(Q, robot.joint_names, where)
 
     terms, temporal = objective(problem, P2, Q, w)  # the final trajectory's objective (stage 2's)
     # contact residual against each phase's placement in its first frame of the final trajectory
@@ -239,6 +368,7 @@ def retarget(human: HumanMotion, robot: Robot, options: RetargetOptions | None =
                           **dict(zip(FRAME_TERMS, terms.sum(axis=0).tolist()))},
             "weights": w.as_dict(),
             "anchor_push_m": anchor_push,
+            "dynamic_balance": zmp_figures,
             "root_pass": shift.figures() if shift is not None else None,
             "smoothing": ({"speed_target_rad_s": targets[0].tolist(), "acceleration_target_rad_s2": targets[1].tolist(),
                            "root_acceleration_target_m_s2": root_target} if opt.smoothing else None),

@@ -196,10 +196,8 @@ def residuals(spec: ProblemSpec, q, dx, p, w):
         tgt = P["sole_t"][3 * c:3 * c + 3]
         res["contact_z"].append(ca.sqrt(P["sole_wz"][f]) * (x[2] - tgt[2]) / L)
         res["floor"].append(ca.fmin(x[2], 0) / L)
-    for f in range(2):  # the sole centre does not slide; the foot may pivot about it (turning)
-        centre = sum(corners[4 * f:4 * f + 4]) / 4
-        tgt = sum(P["sole_t"][3 * c:3 * c + 2] for c in range(4 * f, 4 * f + 4)) / 4
-        res["contact_xy"].append(ca.sqrt(P["sole_wxy"][f]) * (centre[0:2] - tgt) / L)
+    for c, x in enumerate(corners):  # a planted sole neither slides nor twists: every corner stays put
+        res["contact_xy"].append(ca.sqrt(P["sole_wxy"][c // 4]) * (x[0:2] - P["sole_t"][3 * c:3 * c + 2]) / L)
     bal = P["bal"]
     worst = bal[0] * com[0] + bal[1] * com[1] - bal[2]
     for h in range(1, HMAX):

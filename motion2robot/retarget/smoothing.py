@@ -158,3 +158,31 @@ def smooth_hinges(q: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: 
     :func:`smooth_to_targets`); then exactly within the speed limit ``vmax`` and [lower, upper]."""
     out = smooth_to_targets(q, vtarget, atarget, fps, iterations)
     return np.clip(clamp_velocity(out, vmax, fps), lower, upper)
+
+
+def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float,
+                   iterations: int = 16) -> np.ndarray:
+    """(T, k) trajectories near ``x`` with ONE smoothing filter for every column: the rows
+    (frames) whose speed or acceleration is over its target in any column get the same weights in
+    all columns. Applied to a whole configuration (root and hinges together), the filtered path is
+    a time average of nearby configurations, so a point pinned by the kinematics (a planted sole)
+    moves only to second order in the smoothed-away deviation: single-frame kinks the per-frame
+    solves leave are removed without the projection that would put them back."""
+    out = np.array(x, dtype=np.float64)
+    T = len(out)
+    if T < 3:
+        return out
+    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
+    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
+    u = np.zeros((T - 1, 1))
+    m = np.zeros((T - 2, 1))
+    y = out
+    for _ in range(iterations):
+        rv = (np.abs(np.diff(y, axis=0)) / vstep).max(axis=1, keepdims=True)
+        ra = (np.abs(np.diff(y, 2, axis=0)) / astep).max(axis=1, keepdims=True)
+        if rv.max() <= 1.0 and ra.max() <= 1.0:
+            break
+        u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
+        m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
+        y = _smooth(out, np.repeat(u, out.shape[1], axis=1), np.repeat(m, out.shape[1], axis=1))
+    return y

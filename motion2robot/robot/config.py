@@ -64,6 +64,7 @@ else:  # pragma: no cover
 
 from motion2robot.errors import RobotConfigError
 from motion2robot.motion.human import SMPL22
+from motion2robot.hardware.control_table import TABLES
 from motion2robot.robot.servo_map import ServoMap, ServoSpec
 
 _TOP_KEYS = {"name", "description", "model", "defaults", "joints", "nominal", "keypoints", "feet", "scale", "servos"}
@@ -289,9 +290,19 @@ def parse_config(data: Mapping[str, Any], path: Path | None = None) -> RobotConf
             if isinstance(off, bool) or not isinstance(off, int):
                 raise fail(f"servos.offset.{jname} must be an integer number of ticks")
             specs.append(ServoSpec(jname, sid, sign, off))
+        def whole(key: str, default: int, low: int, high: int, unit: str) -> int:
+            v = st.get(key, default)
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+                raise fail(f"servos.{key} must be a whole number of {unit} in {low}..{high}, got {v!r}")
+            return v
+
+        model_name = st.get("model", "XM430-W350")
+        if model_name not in TABLES:
+            raise fail(f"servos.model {model_name!r} has no control table; use one of {', '.join(TABLES)}")
+        ticks = whole("ticks_per_rev", 4096, 1, 1 << 20, "ticks")
         servos = ServoMap(
-            model=str(st.get("model", "XM430-W350")), baud=int(st.get("baud", 2_000_000)),
-            ticks_per_rev=int(st.get("ticks_per_rev", 4096)), center=int(st.get("center", 2048)),
+            model=model_name, baud=whole("baud", 2_000_000, 9600, 10_500_000, "bit/s"),
+            ticks_per_rev=ticks, center=whole("center", 2048, -(1 << 31), (1 << 31) - 1, "ticks"),
             servos=tuple(specs),
         )
 

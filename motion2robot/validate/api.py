@@ -54,8 +54,12 @@ def kinematic_checks(ctx: Context) -> tuple[dict[str, dict], tuple[np.ndarray, n
     return checks, com_zmp
 
 
-def check(motion: RobotMotion, robot: Robot, options: CheckOptions | None = None) -> FeasibilityReport:
-    """Judge ``motion`` on ``robot`` (see :class:`CheckOptions` for the thresholds)."""
+def check(motion: RobotMotion, robot: Robot, options: CheckOptions | None = None, *,
+          physics_if_feasible: bool = False) -> FeasibilityReport:
+    """Judge ``motion`` on ``robot`` (see :class:`CheckOptions` for the thresholds).
+
+    physics_if_feasible: skip the physics playback when a kinematic check already fails (the
+    verdict is INFEASIBLE either way; for searches that judge many attempts)."""
     options = options or CheckOptions()
     _require_match(motion, robot)
     t0 = time.perf_counter()
@@ -70,12 +74,14 @@ def check(motion: RobotMotion, robot: Robot, options: CheckOptions | None = None
         "foot_height": kin.corners[..., 2].min(axis=2), "contacts": ctx.support.any(axis=2),
     }
     pb = None
-    if options.physics and motion.num_frames >= 2:
+    kinematic_fail = physics_if_feasible and not all(c.get("ok", True) for c in checks.values())
+    if options.physics and motion.num_frames >= 2 and not kinematic_fail:
         pb = play(ctx)
         checks["rollout"] = rollout(ctx, pb)
         series.update(rollout_q=pb.q, rollout_time=pb.time, torso_height=pb.torso_height, rollout_qpos=pb.qpos)
     else:
-        why = "--no-physics" if not options.physics else "a single frame has no playback"
+        why = ("--no-physics" if not options.physics else "a kinematic check already fails" if kinematic_fail
+               else "a single frame has no playback")
         checks["rollout"] = {"ok": True, "skipped": why, "frames": []}
     checks["trajectory"] = trajectory(ctx, None if pb is None else pb.qpos[:, :2])
     figures = {
@@ -88,6 +94,10 @@ def check(motion: RobotMotion, robot: Robot, options: CheckOptions | None = None
         "failed": [n for n, c in checks.items() if n != "trajectory" and not c.get("skipped") and not c["ok"]],
         "robot_hash": robot.model_hash,
         "motion_robot_hash": motion.meta.get("robot_hash"),
+        # how the motion was made executable (1.0 and None for motions made before the policy)
+        "tempo": float(motion.meta.get("tempo", 1.0)),
+        "tempo_reason": motion.meta.get("tempo_reason"),
+        "fallback": motion.meta.get("fallback"),
     }
     if pb is not None:
         figures["playback_realtime_factor"] = checks["rollout"]["realtime_factor"]

@@ -64,6 +64,12 @@ def verdict_table(report: FeasibilityReport) -> str:
     if report.reasons:
         out.append("")
         out += [f"- {s}" for s in report.reasons]
+    f = report.figures
+    if f.get("tempo") is not None:
+        out.append("")
+        out.append(f"tempo x{f['tempo']:.2f}" + (f": {f['tempo_reason']}" if f.get("tempo_reason") else ""))
+        if f.get("fallback"):
+            out.append(f"legs: {f['fallback']['mode']}, {f['fallback']['why']} ({f['fallback'].get('what', '')})")
     out.append("")
     out.append("FEASIBLE" if report.feasible else f"INFEASIBLE ({', '.join(report.failed)})")
     return "\n".join(out)

@@ -183,6 +183,11 @@ def render_html(report: Any, motion: RobotMotion, robot: Robot, *, human: HumanM
              "frames": motion.num_frames, "fps": f"{motion.fps:g}", "duration": f"{motion.duration:.2f} s"}
     parts.append('<p class="meta">' + " &middot; ".join(f"{k}: {html.escape(str(v))}" for k, v in facts.items()
                                                           if v not in (None, "")) + "</p>")
+    if meta.get("tempo") is not None:
+        tempo = f"Tempo x{float(meta['tempo']):.2f}: {meta.get('tempo_reason', '')}"
+        fb = meta.get("fallback")
+        legs = (f"Legs: {fb['mode']}, because {fb['why']}; {fb.get('what', '')}" if fb else "Legs: whole body, as generated.")
+        parts.append(f"<h2>Tempo and legs</h2>{_list([tempo, legs])}")
     parts.append("<h2>Reasons</h2>" + (_list(report.reasons) if report.reasons else "<p>None: every check passed.</p>"))
     parts += [f"<h2>{html.escape(t)}</h2>{body}" for t, body in sections]
     parts.append("<h2>Checks</h2>" + _checks_table(report))

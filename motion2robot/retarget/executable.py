@@ -1,0 +1,173 @@
+"""Executable by choice of tempo and legs: the policy stage around the whole-body retargeter.
+
+``retarget`` with ``tempo="auto"`` and/or ``legs="auto"`` (the defaults) judges what it makes with
+the full :func:`~motion2robot.validate.check` (physics playback included) and picks the first
+attempt that passes, in this order:
+
+1. whole body at the generated tempo (x1.0);
+2. whole body slowed: first at the cap (if even that fails, no smaller slow-down can pass and the
+   steps between are skipped), else the smallest of :data:`~.tempo.AUTO_STEPS` that passes; not
+   tried when x1.0 fails a check no tempo changes (:data:`TEMPO_PROOF`: limits, self-collision,
+   the feet on the floor);
+3. the ``stance`` alternative (:mod:`~.stance`: legs in a fixed stance, upper body and head
+   perform), at x1.0, then slowed the same way. Clips with flight phases (runs, jumps) start here:
+   a flat-footed robot of servos cannot make the take-off impulse.
+
+Nothing is silent: the result's meta says the tempo factor (``tempo``, 1.0 = as generated), why
+(``tempo_reason``), the alternative taken (``fallback``: None, or {"mode", "why"}) and whether the
+chosen attempt passed (``executable``). When no attempt passes, the last one (stance at the cap)
+is returned with ``executable`` False and the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from motion2robot.motion.human import HumanMotion
+from motion2robot.retarget.contacts import contact_labels
+from motion2robot.retarget.stance import has_flight, stance
+from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
+from motion2robot.robot.robot import Robot
+from motion2robot.robot_motion import RobotMotion
+
+Solve = Callable[[HumanMotion], RobotMotion]
+
+#: Checks a slower tempo cannot make pass (the same postures, only slower): an attempt failing any
+#: of them is not tried slower.
+TEMPO_PROOF = frozenset({"joint_limits", "self_collision", "ground"})
+
+
+@dataclass(frozen=True)
+class Attempt:
+    legs: str
+    factor: float
+    motion: RobotMotion
+    report: object | None  # FeasibilityReport, or None when not judged
+
+    @property
+    def feasible(self) -> bool:
+        return bool(self.report is not None and self.report.feasible)
+
+    def failed(self) -> list[str]:
+        if self.report is None:
+            return []
+        return [n for n, c in self.report.checks.items() if c.get("ok") is False]
+
+
+def _judge(robot: Robot, options: object | None) -> Callable[[RobotMotion], object]:
+    from motion2robot.validate import CheckOptions, check  # the judge sits above the retargeter
+
+    options = options or CheckOptions()
+    return lambda motion: check(motion, robot, options, physics_if_feasible=True)
+
+
+def _judge_full(robot: Robot, options: object | None) -> Callable[[RobotMotion], object]:
+    from motion2robot.validate import CheckOptions, check
+
+    options = options or CheckOptions()
+    return lambda motion: check(motion, robot, options)
+
+
+def _factors(tempo: str | float, cap: float, human: HumanMotion, robot: Robot) -> list[float]:
+    if tempo == "human":
+        return [1.0]
+    if tempo == "similar":
+        from motion2robot.retarget.scale import auto_scale
+
+        return [similar_factor(auto_scale(human, robot).legs)]
+    if tempo == "auto":
+        return auto_factors(cap)
+    return [float(tempo)]
+
+
+def _search(make: Callable[[float], Attempt], factors: list[float]) -> tuple[Attempt | None, list[Attempt]]:
+    """The first passing attempt in ``factors`` order, trying the first, then the last, then the
+    ones between (a slower tempo passing is what makes the ones between worth trying)."""
+    tried: list[Attempt] = []
+    first = make(factors[0])
+    tried.append(first)
+    if first.feasible or len(factors) == 1 or set(first.failed()) & TEMPO_PROOF:
+        return (first if first.feasible else None), tried
+    last = make(factors[-1])
+    tried.append(last)
+    if not last.feasible:
+        return None, tried
+    for k in factors[1:-1]:
+        a = make(k)
+        tried.append(a)
+        if a.feasible:
+            return a, tried
+    return last, tried
+
+
+def _words(failed: list[str]) -> str:
+    return ", ".join(failed) if failed else "nothing"
+
+
+def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
+         check_options: object | None = None) -> tuple[RobotMotion, object | None]:
+    """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
+    attempt, not judged). ``check_options``: the judge's CheckOptions (default: every check with
+    the physics playback). See the module text for the order of attempts."""
+    factors = _factors(tempo, cap, human, robot)
+    judging = tempo == "auto" or legs == "auto"
+    judge = _judge(robot, check_options) if judging else (lambda motion: None)
+    flight = False
+    modes = [legs] if legs in ("whole", "stance") else ["whole", "stance"]
+    if legs == "auto":
+        labels, _ = contact_labels(human)
+        flight = has_flight(human, labels)
+        if flight:
+            modes = ["stance"]
+
+    def attempt(mode: str, k: float) -> Attempt:
+        h = stance(human) if mode == "stance" else human
+        motion = solve(stretch(h, k))
+        return Attempt(mode, k, motion, judge(motion))
+
+    tried: list[Attempt] = []
+    chosen = None
+    for mode in modes:
+        ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors)
+        tried += runs
+        if ok is not None:
+            chosen = ok
+            break
+    final = chosen or tried[-1]
+    meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
+                  "executable": None if final.report is None else final.feasible,
+                  "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
+                                "failed": a.failed()} for a in tried]}
+    if final.report is None:
+        meta["tempo_reason"] = (f"played x{final.factor:.2f} as asked (--tempo {tempo})" if final.factor != 1.0
+                                else "played at the generated tempo (x1.00)")
+    elif chosen is None:
+        meta["tempo_reason"] = (f"no attempt passes up to the tempo cap x{cap:g}: at x{final.factor:.2f} "
+                                f"({final.legs} legs) {_words(final.failed())} still fail")
+    elif final.factor == 1.0:
+        meta["tempo_reason"] = "played at the generated tempo (x1.00): it passes the checks as generated"
+    else:
+        base = next(a for a in tried if a.legs == final.legs)
+        meta["tempo_reason"] = (f"slowed x{final.factor:.2f}, the smallest slow-down tried that passes "
+                                f"(at x{base.factor:.2f} {_words(base.failed())} failed)")
+    if final.legs == "stance":
+        if legs == "stance":
+            why = "asked for (--legs stance)"
+        elif flight:
+            why = (f"the human motion has flight phases (both feet off the floor), which {robot.name}'s servos "
+                   "cannot produce")
+        else:
+            whole = [a for a in tried if a.legs == "whole"]
+            why = (f"whole-body execution fails at every tempo tried up to x{whole[-1].factor:.2f} "
+                   f"({_words(whole[-1].failed())})")
+        meta["fallback"] = {"mode": "stance", "why": why,
+                            "what": "the legs keep a fixed double-support stance at the clip's first heading; "
+                                    "the upper body and head perform"}
+    else:
+        meta["fallback"] = None
+    if chosen is None and final.report is not None and judging:  # the full report of what is returned
+        final = Attempt(final.legs, final.factor, final.motion, _judge_full(robot, check_options)(final.motion))
+    if final.report is not None:  # the report speaks of the motion as annotated
+        final.report.figures.update(tempo=meta["tempo"], tempo_reason=meta["tempo_reason"], fallback=meta["fallback"])
+    return final.motion.with_(meta=meta), final.report

@@ -1,0 +1,162 @@
+"""Benchmark of executability: how much of the retargeted motion the robot can really perform.
+
+Over every readable clip of ``../shared/motions`` (one row per clip, as ``batch`` expands the
+folder), retargets with the default options (and, for comparison, the kinematic-only pipeline)
+and runs the full ``check`` with the physics playback. Prints per clip and in total:
+
+- executable %: ``check`` FEASIBLE, rollout included;
+- stays-up %: the open-loop physics playback does not fall;
+- tempo factor (median, max) and the clips on a fallback;
+- keypoint error (mm, mean over frames) and root path error (robot metres, mean) against the
+  kinematic-only retarget of the same clip;
+- the failing checks and how often each fails;
+- retargeting speed in frames per CPU second, beside the kinematic-only figure (same run).
+
+Run:  python scripts/bench_executable.py [--robot op3] [--limit N] [--tempo auto] [--csv out.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from motion2robot.batch.work import expand_inputs
+from motion2robot.motion import read_motion
+from motion2robot.retarget import RetargetOptions, retarget
+from motion2robot.robot import load_robot
+from motion2robot.validate import CheckOptions, check
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
+
+
+def kinematic_options() -> RetargetOptions:
+    """The pipeline as it was before the executability stages: kinematic retargeting only."""
+    fields = RetargetOptions.__dataclass_fields__
+    kw = {k: v for k, v in (("tempo", "human"), ("dynamic_balance", False), ("fallback", "off")) if k in fields}
+    return RetargetOptions(**kw)
+
+
+def default_options(tempo: str | None) -> RetargetOptions:
+    if tempo is None or "tempo" not in RetargetOptions.__dataclass_fields__:
+        return RetargetOptions()
+    return RetargetOptions(tempo=tempo)
+
+
+def keypoint_error_mm(motion) -> float:
+    return 1000.0 * float(np.mean(motion.meta["solver"]["residual_per_frame"]))
+
+
+def root_xy(motion) -> np.ndarray:
+    return np.asarray(motion.qpos[:, :2])
+
+
+def path_error(a, b) -> float:
+    """Mean distance (m) between two root paths, b resampled onto a's duration."""
+    pa, pb = root_xy(a), root_xy(b)
+    ta = np.linspace(0.0, 1.0, len(pa))
+    tb = np.linspace(0.0, 1.0, len(pb))
+    pbr = np.stack([np.interp(ta, tb, pb[:, i]) for i in range(2)], axis=1)
+    return float(np.linalg.norm(pa - pbr, axis=1).mean())
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robot", default="op3")
+    ap.add_argument("--motions", default=str(SHARED))
+    ap.add_argument("--limit", type=int, default=None, help="first N clips only")
+    ap.add_argument("--tempo", default=None, help="tempo policy passed to retarget (default: the retargeter's)")
+    ap.add_argument("--no-baseline", action="store_true", help="skip the kinematic-only comparison")
+    ap.add_argument("--csv", default=None)
+    args = ap.parse_args()
+    if not Path(args.motions).is_dir():
+        print(f"no motions folder at {args.motions}", file=sys.stderr)
+        return 2
+    robot = load_robot(args.robot)
+    items = list(expand_inputs([args.motions]).items)[: args.limit]
+    opts, base_opts = default_options(args.tempo), kinematic_options()
+    copts = CheckOptions()
+    retarget(read_motion(items[0].path, clip=items[0].clip)[0], robot, opts)  # compile outside the timing
+    rows = []
+    cpu_new = cpu_base = frames_total = 0.0
+    for item in items:
+        name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                human = read_motion(item.path, clip=item.clip)[0]
+        except Exception as err:  # noqa: BLE001 - unreadable clips are not part of the figure
+            print(f"  skip {name}: {str(err).splitlines()[0][:100]}")
+            continue
+        c0 = time.process_time()
+        try:
+            motion = retarget(human, robot, opts)
+        except Exception as err:  # noqa: BLE001
+            print(f"  FAIL {name}: retarget: {str(err).splitlines()[0][:160]}")
+            rows.append({"clip": name, "error": str(err)})
+            continue
+        c1 = time.process_time()
+        base = None
+        if not args.no_baseline:
+            base = retarget(human, robot, base_opts)
+        c2 = time.process_time()
+        cpu_new += c1 - c0
+        cpu_base += c2 - c1
+        frames_total += human.num_frames
+        rep = check(motion, robot, copts)
+        roll = rep.checks.get("rollout", {})
+        failed = [n for n, c in rep.checks.items() if c.get("ok") is False]
+        row = {
+            "clip": name, "frames": human.num_frames, "feasible": rep.feasible, "stays_up": not roll.get("fell", False),
+            "tempo": float(motion.meta.get("tempo", 1.0)), "fallback": motion.meta.get("fallback"),
+            "kp_mm": keypoint_error_mm(motion), "failed": failed, "reasons": rep.reasons,
+        }
+        if base is not None:
+            row["kp_base_mm"] = keypoint_error_mm(base)
+            row["path_err_m"] = path_error(motion, base)
+        rows.append(row)
+        fb = f" fallback={row['fallback']['mode']}" if isinstance(row["fallback"], dict) else ""
+        print(f"  {'OK  ' if rep.feasible else 'FAIL'} {name:48s} up={row['stays_up']!s:5s} tempo={row['tempo']:.2f}"
+              f"{fb} kp={row['kp_mm']:.1f}mm" + (f" (kin {row['kp_base_mm']:.1f})" if base is not None else "")
+              + (f" failed={','.join(failed)}" if failed else ""), flush=True)
+    ok = [r for r in rows if "error" not in r]
+    n = len(ok)
+    if not n:
+        print("no clip retargeted")
+        return 1
+    tempos = np.array([r["tempo"] for r in ok])
+    counts = collections.Counter(c for r in ok for c in r["failed"])
+    print(f"\n{robot.name}: {n} clips ({len(rows) - n} retarget errors), {int(frames_total)} frames")
+    print(f"executable (check FEASIBLE, rollout included): {sum(r['feasible'] for r in ok)}/{n} = "
+          f"{100 * np.mean([r['feasible'] for r in ok]):.1f} %")
+    print(f"stays up in open-loop playback: {sum(r['stays_up'] for r in ok)}/{n} = {100 * np.mean([r['stays_up'] for r in ok]):.1f} %")
+    print(f"tempo factor: median {np.median(tempos):.2f}, max {tempos.max():.2f}; clips on a fallback: "
+          f"{sum(1 for r in ok if r['fallback'])}")
+    print("failing checks: " + (", ".join(f"{k} {v}" for k, v in counts.most_common()) or "none"))
+    kp = np.array([r["kp_mm"] for r in ok])
+    if not args.no_baseline:
+        kb = np.array([r["kp_base_mm"] for r in ok])
+        pe = np.array([r["path_err_m"] for r in ok])
+        print(f"keypoint error: {kp.mean():.1f} mm (kinematic-only {kb.mean():.1f} mm, {100 * (kp.mean() / kb.mean() - 1):+.0f} %); "
+              f"root path vs kinematic-only: mean {pe.mean() * 100:.1f} cm, max {pe.max() * 100:.1f} cm")
+        print(f"speed: {frames_total / cpu_new:,.0f} frames per CPU second (kinematic-only {frames_total / cpu_base:,.0f}, same run)")
+    else:
+        print(f"keypoint error: {kp.mean():.1f} mm; speed: {frames_total / cpu_new:,.0f} frames per CPU second")
+    if args.csv:
+        import csv
+        with open(args.csv, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["clip", "feasible", "stays_up", "tempo", "fallback", "kp_mm", "failed"])
+            for r in ok:
+                w.writerow([r["clip"], r["feasible"], r["stays_up"], r["tempo"], bool(r["fallback"]), round(r["kp_mm"], 2),
+                            " ".join(r["failed"])])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

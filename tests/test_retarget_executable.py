@@ -1,0 +1,142 @@
+"""Executable by construction: the tempo/legs policy on real clips, the ZMP planning stage, the
+configuration smoothing, planted soles that neither slide nor twist, and the CLI's answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motion2robot.cli import main
+from motion2robot.motion import read_motion
+from motion2robot.motion.ops import trim
+from motion2robot.retarget import RetargetOptions, retarget, retarget_and_check, whole_body
+from motion2robot.retarget.smoothing import smooth_jointly
+from motion2robot.retarget.zmp_plan import GRAVITY, cart_table_shift
+from motion2robot.robot import load_robot
+from motion2robot.validate import check
+from tests._shared import MOTIONS, requires_shared
+
+
+@pytest.fixture(scope="module")
+def op3():
+    return load_robot("op3")
+
+
+def _box(T, half=0.03):
+    planes = np.tile([0.0, 0.0, 1.0], (T, 8, 1))
+    planes[:, :4] = [(1, 0, half), (-1, 0, half), (0, 1, half), (0, -1, half)]
+    return planes
+
+
+def test_cart_table_shift_puts_the_zmp_inside_and_starts_and_ends_at_rest():
+    T, fps, z = 200, 50.0, 0.25
+    t = np.arange(T) / fps
+    zmp = np.stack([0.06 * np.exp(-((t - 2.0) / 0.3) ** 2), np.zeros(T)], axis=1)  # 6 cm out, then back
+    d, outside = cart_table_shift(zmp, np.full(T, z), _box(T), np.ones(T, bool), fps)
+    dd = np.zeros_like(d)
+    dd[1:-1] = (d[2:] - 2 * d[1:-1] + d[:-2]) * fps ** 2
+    corrected = zmp + d - z / GRAVITY * dd
+    assert np.abs(corrected[:, 0]).max() <= 0.03 + 1e-4
+    assert outside.max() < 1e-4
+    assert np.abs(d[:3]).max() < 1e-3 and np.abs(d[-3:]).max() < 1e-3  # at rest at both ends
+    assert np.abs(np.diff(d, 2, axis=0)).max() * fps ** 2 < 5.0  # smooth, no kink
+
+
+def test_smooth_jointly_filters_every_column_alike():
+    rng = np.random.default_rng(1)
+    T = 120
+    a = np.cumsum(rng.normal(0, 0.01, T))
+    a[60] += 0.05  # a single-frame kink
+    b = np.sin(np.arange(T) / 10)
+    x = np.stack([a, b, 2 * a - 3 * b], axis=1)  # a point pinned by a linear "kinematics"
+    y = smooth_jointly(x, np.full(3, np.inf), np.full(3, 2.0), 20.0)
+    np.testing.assert_allclose(y[:, 2], 2 * y[:, 0] - 3 * y[:, 1], atol=1e-12)
+    assert np.abs(np.diff(y[:, 0], 2)).max() < np.abs(np.diff(a, 2)).max() / 3
+
+
+@requires_shared
+def test_a_walk_becomes_feasible_under_auto_and_says_how(op3):
+    human = read_motion(MOTIONS / "bvh" / "bandai_walk_normal_001.bvh")[0]
+    human = trim(human, 0, 90)
+    motion, report = retarget_and_check(human, op3)
+    assert report is not None and report.feasible, report.reasons
+    assert motion.meta["executable"] is True
+    assert motion.meta["tempo_reason"]
+    # whatever it took is in the meta: the attempts, the tempo, the alternative and why
+    assert motion.meta["attempts"][0] == {"legs": "whole", "tempo": 1.0, "feasible": False,
+                                          "failed": motion.meta["attempts"][0]["failed"]} or motion.meta["fallback"] is None
+    if motion.meta["fallback"]:
+        assert motion.meta["fallback"]["mode"] == "stance" and "whole-body" in motion.meta["fallback"]["why"]
+    assert report.figures["tempo"] == motion.meta["tempo"]
+    assert check(motion, op3).feasible  # the saved motion passes on its own
+
+
+@requires_shared
+def test_a_run_takes_the_stance_alternative_and_says_why(op3):
+    human = read_motion(MOTIONS / "bvh" / "bandai_run_normal_001.bvh")[0]
+    motion = retarget(human, op3)
+    fb = motion.meta["fallback"]
+    assert fb["mode"] == "stance" and "flight" in fb["why"]
+    assert [a["legs"] for a in motion.meta["attempts"]] == ["stance"] * len(motion.meta["attempts"])
+    assert motion.meta["executable"] is True
+
+
+@requires_shared
+def test_quasi_static_clips_keep_their_tempo(op3):
+    for rel in ("bvh/bandai_byebye_normal_001.bvh", "humanml3d_joints/M010968.npy"):
+        motion = retarget(read_motion(MOTIONS / rel)[0], op3)
+        assert motion.meta["tempo"] == 1.0 and motion.meta["fallback"] is None, (rel, motion.meta["attempts"])
+        assert motion.meta["executable"] is True
+
+
+@requires_shared
+def test_planted_soles_neither_slide_nor_twist(op3):
+    """A walk in a circle, whole body at the human's tempo: every corner of a planted sole stays
+    within 1 cm/s (the sole centre alone was pinned before, and soles twisted while the body turned)."""
+    human = trim(read_motion(MOTIONS / "humanml3d_joints" / "000021_raw_joints52.npy")[0], 0, 100)
+    motion = whole_body(human, op3)
+    from motion2robot.retarget.compiled import compiled_problem
+
+    T = motion.num_frames
+    _, corners, _, _ = compiled_problem(op3).points_eval(T)(motion.qpos)
+    corners = corners.reshape(T, 2, 4, 3)
+    planted = np.asarray(motion.meta["contacts"], bool)
+    both = planted[1:] & planted[:-1]
+    speed = np.linalg.norm(np.diff(corners[..., :2], axis=0), axis=-1).max(axis=-1) * motion.fps  # (T-1, 2)
+    assert both.sum() > 40
+    assert speed[both].max() < 0.01
+
+
+@requires_shared
+def test_finer_output_rate_reveals_no_spike(op3):
+    """The same clip at 100 fps: peak root and joint accelerations within 1.5x of the native rate's."""
+    human = read_motion(MOTIONS / "bvh" / "bandai_byebye_normal_001.bvh")[0]
+    opts = RetargetOptions(tempo="human", legs="whole")
+    native = retarget(human, op3, opts)
+    fine = retarget(human, op3, RetargetOptions(tempo="human", legs="whole", fps=100.0))
+
+    def peaks(m):
+        acc = np.diff(m.qpos, 2, axis=0) * m.fps ** 2
+        return np.abs(acc[:, :3]).max(), np.abs(acc[:, 7:]).max()
+
+    (rn, jn), (rf, jf) = peaks(native), peaks(fine)
+    assert rf <= 1.5 * rn and jf <= 1.5 * jn, (rn, rf, jn, jf)
+
+
+@requires_shared
+def test_cli_tempo_answers(tmp_path, capsys):
+    src = MOTIONS / "humanml3d_joints" / "M010968.npy"
+    for bad in (["--tempo", "0"], ["--tempo", "fast"], ["--tempo-cap", "nan"], ["--legs", "none"]):
+        with pytest.raises(SystemExit) as exc:  # argparse: usage and the one error line, exit 2
+            main(["retarget", str(src), *bad, "-o", str(tmp_path / "a.npz")])
+        assert exc.value.code == 2
+        assert bad[0] in capsys.readouterr().err
+    assert not (tmp_path / "a.npz").exists()
+    assert main(["retarget", str(src), "-o", str(tmp_path / "b.npz")]) == 0
+    out = capsys.readouterr().out
+    assert "tempo x1.00" in out
+    # a cap that cannot be met: reported, the best attempt written, exit 1, no crash
+    dance = MOTIONS / "bvh" / "bandai_kick_normal_001.bvh"
+    code = main(["retarget", str(dance), "--legs", "whole", "--tempo-cap", "1", "-o", str(tmp_path / "c.npz")])
+    out = capsys.readouterr().out
+    assert code == 1 and "not executable" in out and (tmp_path / "c.npz").is_file()
