@@ -125,12 +125,14 @@ def test_batch_of_pairs_summarises_the_edits_that_stay_executable(tmp_path: Path
     np.save(tmp_path / "edit.npy", z2y(p))
     (tmp_path / "pairs.txt").write_text("# source\tedit\nsrc.npy\tedit.npy\n")
     out = tmp_path / "r.jsonl"
-    code = main(["batch", "--pairs", str(tmp_path / "pairs.txt"), "--out", str(out), "--no-physics", "-j", "1", "-q"])
+    code = main(["batch", "--pairs", str(tmp_path / "pairs.txt"), "--out", str(out), "--no-physics", "-j", "1", "-q",
+                 "--save-motions", str(tmp_path / "motions")])
     text = capsys.readouterr().out
     assert code == 0 and "edit pairs: 1; the edit stays executable in" in text
     row = json.loads(out.read_text().splitlines()[0])
     assert row["error"] is None and row["edit"]["human_parts_changed"] == ["right_arm"]
     assert all(j.startswith("r_") for j in row["edit"]["robot_joints_changed"])
+    assert Path(row["motion_file"]).is_file() and Path(row["edit"]["source_motion_file"]).is_file()
 
 
 @requires_shared

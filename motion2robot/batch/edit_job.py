@@ -59,3 +59,14 @@ class EditJob(FeasibilityJob):
                        "robot_joints_changed": sorted(result.robot),
                        "breaks": [r for r in rep.reasons if r not in rep_src.reasons],
                        "fixes": [r for r in rep_src.reasons if r not in rep.reasons]}
+        if config.save_motions:
+            from pathlib import Path
+
+            from motion2robot.batch.feasibility import motion_file_name
+
+            stage[0] = "save"
+            stem = Path(config.save_motions) / motion_file_name(item)
+            row["motion_file"] = str(result.edited.with_(meta={"feasible": bool(rep.feasible)}).save(
+                stem.with_name(stem.stem + "_edited.npz")))
+            row["edit"]["source_motion_file"] = str(result.source.with_(
+                meta={"feasible": bool(rep_src.feasible)}).save(stem.with_name(stem.stem + "_source.npz")))
