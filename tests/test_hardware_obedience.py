@@ -62,6 +62,25 @@ def _fault_run(tmp_path: Path, fault: Fault, q: np.ndarray, **kw):
     return rep, tel, snap
 
 
+def test_a_servo_catching_up_is_obeying_one_standing_still_is_not():
+    """Far from its goal, a servo that moves towards it every tick (slower than the goals move) is
+    never a divergence fault; the same error with the servo standing still is, after persist_ticks."""
+    from motion2robot.hardware.errors import DivergenceFault
+    from motion2robot.hardware.obedience import ObedienceMonitor
+
+    lim = ObedienceLimits.derive(LIMITS, CAL, 100.0, 5)
+    n = len(CAL.joints)
+    goal = np.full(n, 3000.0)
+    far = goal - 1.5 * lim.divergence.max() * CAL.ticks_per_rad
+    catching = ObedienceMonitor(lim, CAL, CAL.ids.tolist())
+    for k in range(5 * lim.persist_ticks):
+        catching.check_divergence(goal, far + 3.0 * k)  # 3 encoder ticks closer every tick
+    stuck = ObedienceMonitor(lim, CAL, CAL.ids.tolist())
+    with pytest.raises(DivergenceFault):
+        for _ in range(lim.persist_ticks + 1):
+            stuck.check_divergence(goal, far)
+
+
 def test_a_tripped_bus_watchdog_is_a_fault(tmp_path):
     """A servo whose watchdog tripped answers normally but refuses goals: read back, it is a fault."""
     rep, tel, snap = _fault_run(tmp_path, Fault("watchdog", 7, after_writes=5), np.zeros((100, N)))

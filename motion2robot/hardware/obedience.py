@@ -24,7 +24,10 @@ was sent. Each of these is a fault (a typed :class:`~motion2robot.hardware.error
   tick (the present is read right after a new goal is written, so it lags by up to one step, one
   more for the transfer), 2 ticks cover encoder and goal rounding. At 100 Hz on the OP3:
   0.19 + 0.096 + 0.003 = 0.29 rad. ``max_divergence`` replaces the formula by a fixed value.
-  ``persist_ticks`` = the ticks in 50 ms, at least 2.
+  ``persist_ticks`` = the ticks in 50 ms, at least 2. A tick in which the servo moved at least
+  two encoder ticks towards its goal does not count: a servo catching up (slower than the guard
+  lets the goals move, e.g. its own Velocity Limit register set lower) is obeying; one that
+  stands still or moves away is not.
 """
 
 from __future__ import annotations
@@ -91,6 +94,7 @@ class ObedienceMonitor:
         self.cal = cal
         self.ids = list(ids)
         self.over = np.zeros(len(self.ids), dtype=np.int64)
+        self.last_present: np.ndarray | None = None
         self.last_heard: float | None = None
         self.next_state = limits.state_every  # tick count at which a state read is due
         self.state_turn = 0
@@ -118,6 +122,11 @@ class ObedienceMonitor:
         """Goal and present (ticks, calibration order) of this tick."""
         err = np.abs(self.cal.to_radians(present) - self.cal.to_radians(goal))
         over = err > self.limits.divergence
+        present = np.asarray(present, dtype=np.float64)
+        if self.last_present is not None:  # moving towards the goal: catching up, obeying
+            towards = np.sign(np.asarray(goal, dtype=np.float64) - self.last_present) * (present - self.last_present)
+            over &= towards < 2.0
+        self.last_present = present
         self.over = np.where(over, self.over + 1, 0)
         bad = np.where(self.over >= self.limits.persist_ticks)[0]
         if bad.size:
