@@ -160,15 +160,13 @@ def test_quasi_static_clips_are_smooth(op3, path):
 
 
 def test_demo_is_feasible_with_physics(op3):
-    """Every check passes on the demo but ``ground``: its planted soles still twist about their
-    pinned centres (up to 10 cm/s at the corners; issue 16 item 2, the retargeter's part), which
-    ``ground`` fails since it measures every touching sole point. Put ``assert report.feasible``
-    back when the retargeter holds the soles."""
+    """Every check passes on the demo, ``ground`` included (every touching sole point held: no
+    twist about the pinned centres, measured on this branch after merging #16 with #19 items 2-4)."""
     motion = retarget(read_motion(DEMO)[0], op3)
     report = check(motion, op3)
-    assert [n for n in report.figures["failed"] if n != "ground"] == [], report.reasons
+    assert report.feasible, report.reasons
     g = report.checks["ground"]
-    assert g["penetrations"] == [] and g["skimming"] == [] and {v["kind"] for v in g["slipping"]} == {"twist"}
+    assert g["penetrations"] == [] and g["skimming"] == [] and g["slipping"] == []
 
 
 @requires_shared
