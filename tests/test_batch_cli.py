@@ -69,21 +69,22 @@ def test_batch_writes_one_row_per_clip_and_resumes(tmp_path, capsys):
     assert len(_lines(out)) == 4 and "1 old rows removed" in capsys.readouterr().err
 
 
-def test_check_thresholds_reach_the_batch_workers(tmp_path, capsys):
-    """The same clip, judged with a strict and a lax swing-foot clearance: the flags of ``check``
-    reach ``batch``'s workers."""
+def test_check_thresholds_reach_the_batch_workers(tmp_path, capsys, monkeypatch):
+    """The flags of ``check`` given to ``batch`` end up in the CheckOptions its workers judge with."""
+    import motion2robot.batch as batch
+    from motion2robot.batch.feasibility import FeasibilityJob
+
     data = tmp_path / "data"
-    clip = _clips(data, 1)[0]
-    src = np.load(MOTIONS / "humanml3d_joints" / "007005.npy")[80:120].copy()  # a step onto a stone
-    src[..., 1] -= src[:, [7, 8, 10, 11], 1].min()
-    np.save(clip, src)
-    strict, lax = tmp_path / "strict.jsonl", tmp_path / "lax.jsonl"
-    base = ["batch", str(data), "--robot", "op3", "--no-physics", "--jobs", "1", "-q", "--tempo", "human", "--legs", "whole"]
-    assert main([*base, "--out", str(strict), "--swing-clearance", "0.3"]) == 0  # a step skims within 30 cm
-    assert main([*base, "--out", str(lax), "--slip-speed", "100", "--swing-clearance", "1e-6"]) == 0
+    _clips(data, 1)
+    seen = []
+    monkeypatch.setattr(batch, "run_plan", lambda plan, config, **kw: seen.append(config))
+    args = ["batch", str(data), "--robot", "op3", "--out", str(tmp_path / "r.jsonl"), "-q",
+            "--slip-speed", "0.05", "--swing-clearance", "0.004", "--stream-rate", "50", "--sag-compensation"]
+    assert main(args) == 0
     capsys.readouterr()
-    assert "ground" in _lines(strict)[0]["failed_checks"]
-    assert "ground" not in _lines(lax)[0]["failed_checks"]
+    opts = FeasibilityJob.setup(seen[0]).check_options
+    assert (opts.slip_speed, opts.swing_clearance, opts.stream_rate, opts.sag_compensation) == (0.05, 0.004, 50.0, True)
+    assert opts.touch_height == 0.002 and opts.physics  # flags not given keep their defaults
 
 
 def test_unknown_robot_stops_before_any_work(tmp_path, capsys):

@@ -160,8 +160,7 @@ def test_quasi_static_clips_are_smooth(op3, path):
 
 
 def test_demo_is_feasible_with_physics(op3):
-    """Every check passes on the demo, ``ground`` included (every touching sole point held: no
-    twist about the pinned centres, measured on this branch after merging #16 with #19 items 2-4)."""
+    """Every check passes on the demo, ``ground`` included: its planted soles hold at every corner."""
     motion = retarget(read_motion(DEMO)[0], op3)
     report = check(motion, op3)
     assert report.feasible, report.reasons

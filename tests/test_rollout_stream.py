@@ -40,8 +40,15 @@ def op3():
 def sim_clock(monkeypatch):
     """The stream loop on a simulated clock: every deadline is met exactly, no tick is missed."""
     now = [1000.0]
+
+    def sleep_until(deadline, *args, interrupted=None, **kwargs):
+        if interrupted is not None and interrupted():
+            return False
+        now[0] = max(now[0], deadline)
+        return True
+
     monkeypatch.setattr("motion2robot.hardware.stream.clock", lambda: now[0])
-    monkeypatch.setattr("motion2robot.hardware.stream.sleep_until", lambda t, *a, **k: now.__setitem__(0, max(now[0], t)))
+    monkeypatch.setattr("motion2robot.hardware.stream.sleep_until", sleep_until)
     return now
 
 
