@@ -33,8 +33,9 @@ from motion2robot.robot.robot import Robot
 
 #: Capsules kept per limb: the largest bodies (legs: thigh, shin, foot, ankle and hip-roll links;
 #: arms: upper arm, forearm; torso: chest and pelvis when they are separate bodies; hand: the
-#: wrist keypoint's body and below).
-LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 2, "hand": 2}
+#: wrist keypoint's body and below, up to 6 bodies: a gripper's fingers and motors, whose smaller
+#: links went 5 mm into Talos' thigh when only the 2 largest were kept).
+LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 2, "hand": 6}
 #: Pairs closer than this (m) at the nominal posture get this much clearance there (see CapsulePair).
 NOMINAL_CLEARANCE = 0.02
 #: A box whose long half-extent is this many times its cross half-extent is "elongated".
