@@ -10,7 +10,10 @@ and runs the full ``check`` with the physics playback. Prints per clip and in to
 - keypoint error (mm, mean over frames) and root path error (robot metres, mean) against the
   kinematic-only retarget of the same clip;
 - the failing checks and how often each fails;
-- retargeting speed in frames per CPU second, beside the kinematic-only figure (same run).
+- retargeting speed in frames per CPU second, beside the kinematic-only figure (same run);
+- artefacts: the chosen tempo and legs retargeted again at 100 fps, whose peak root and joint
+  accelerations must stay within 1.5x of the native rate's (``--no-artefacts`` skips it), and
+  the clips with a violation confined to their first or last 2 frames.
 
 Run:  python scripts/bench_executable.py [--robot op3] [--limit N] [--tempo auto] [--csv out.csv]
 """
@@ -37,15 +40,11 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 def kinematic_options() -> RetargetOptions:
     """The pipeline as it was before the executability stages: kinematic retargeting only."""
-    fields = RetargetOptions.__dataclass_fields__
-    kw = {k: v for k, v in (("tempo", "human"), ("dynamic_balance", False), ("fallback", "off")) if k in fields}
-    return RetargetOptions(**kw)
+    return RetargetOptions(tempo="human", legs="whole", dynamic_balance=False)
 
 
 def default_options(tempo: str | None) -> RetargetOptions:
-    if tempo is None or "tempo" not in RetargetOptions.__dataclass_fields__:
-        return RetargetOptions()
-    return RetargetOptions(tempo=tempo)
+    return RetargetOptions() if tempo is None else RetargetOptions(tempo=tempo)
 
 
 def keypoint_error_mm(motion) -> float:
@@ -65,6 +64,19 @@ def path_error(a, b) -> float:
     return float(np.linalg.norm(pa - pbr, axis=1).mean())
 
 
+def peak_accelerations(motion) -> tuple[float, float]:
+    """(root m/s^2, joint rad/s^2) peak second differences."""
+    acc = np.diff(motion.qpos, 2, axis=0) * motion.fps ** 2
+    return float(np.abs(acc[:, :3]).max()), float(np.abs(acc[:, 7:]).max())
+
+
+def edge_only(report, frames: int) -> list[str]:
+    """Checks that fail only within the first or last 2 frames."""
+    ends = set(range(2)) | set(range(frames - 2, frames))
+    return [n for n, c in report.checks.items()
+            if c.get("ok") is False and c.get("frames") and set(c["frames"]) <= ends]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robot", default="op3")
@@ -72,6 +84,7 @@ def main() -> int:
     ap.add_argument("--limit", type=int, default=None, help="first N clips only")
     ap.add_argument("--tempo", default=None, help="tempo policy passed to retarget (default: the retargeter's)")
     ap.add_argument("--no-baseline", action="store_true", help="skip the kinematic-only comparison")
+    ap.add_argument("--no-artefacts", action="store_true", help="skip the 100 fps resampling comparison")
     ap.add_argument("--csv", default=None)
     args = ap.parse_args()
     if not Path(args.motions).is_dir():
@@ -119,6 +132,12 @@ def main() -> int:
         if base is not None:
             row["kp_base_mm"] = keypoint_error_mm(base)
             row["path_err_m"] = path_error(motion, base)
+        if not args.no_artefacts:
+            fine_opts = RetargetOptions(fps=100.0, tempo=row["tempo"], legs=(row["fallback"] or {}).get("mode", "whole"))
+            fine = retarget(human, robot, fine_opts)
+            (rn, jn), (rf, jf) = peak_accelerations(motion), peak_accelerations(fine)
+            row["fine_ratio"] = max(rf / max(rn, 1e-9), jf / max(jn, 1e-9))
+        row["edge_only"] = edge_only(rep, motion.num_frames)
         rows.append(row)
         fb = f" fallback={row['fallback']['mode']}" if isinstance(row["fallback"], dict) else ""
         print(f"  {'OK  ' if rep.feasible else 'FAIL'} {name:48s} up={row['stays_up']!s:5s} tempo={row['tempo']:.2f}"
@@ -147,6 +166,12 @@ def main() -> int:
         print(f"speed: {frames_total / cpu_new:,.0f} frames per CPU second (kinematic-only {frames_total / cpu_base:,.0f}, same run)")
     else:
         print(f"keypoint error: {kp.mean():.1f} mm; speed: {frames_total / cpu_new:,.0f} frames per CPU second")
+    edges = [r["clip"] for r in ok if r["edge_only"]]
+    print(f"violations confined to the first/last 2 frames: {len(edges)} clips" + (f" ({', '.join(edges[:5])})" if edges else ""))
+    if not args.no_artefacts:
+        ratios = np.array([r["fine_ratio"] for r in ok])
+        print(f"100 fps vs native rate, peak root/joint acceleration ratio: median {np.median(ratios):.2f}, "
+              f"max {ratios.max():.2f}; clips over 1.5x: {int((ratios > 1.5).sum())}")
     if args.csv:
         import csv
         with open(args.csv, "w", newline="") as fh:

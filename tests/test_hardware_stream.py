@@ -34,7 +34,9 @@ SMAP = ServoMap("XM430-W350", 1_000_000, 4096, 2048,
                 tuple(ServoSpec(n, i + 1, SIGNS[i], 5 * i - 40) for i, n in enumerate(NAMES)))
 CAL = Calibration.from_servo_map(SMAP)
 LIMITS = JointLimits(tuple(NAMES), np.full(N, -1.5), np.full(N, 1.2), np.full(N, 6.0))
-FAST = TorquePolicy(on_end=0.0, ramp_speed=6.0, watchdog_ms=100)
+# The Bus Watchdog is armed (a silence longer than it is a fault), but long enough that a host
+# starved for a few hundred ms on a loaded shared machine does not end a test about something else.
+FAST = TorquePolicy(on_end=0.0, ramp_speed=6.0, watchdog_ms=500)
 RATE = 100.0
 # Reply timeouts assume 10 ms of adapter latency: the pty relay stalls for several ms on a loaded
 # shared machine; fault assertions count ticks and goal packets, not milliseconds.
@@ -205,7 +207,8 @@ def _streaming_process(tmp_path: Path, sig: int) -> tuple[subprocess.Popen, str,
     tel_path = tmp_path / "m.jsonl"
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen([sys.executable, "-m", "motion2robot", "stream", str(path), "--virtual", "--baud", "1000000",
-                             "--loop", "--ramp-speed", "4", "--latency-ms", str(LATENCY_MS), "--telemetry", str(tel_path)],
+                             "--loop", "--ramp-speed", "4", "--latency-ms", str(LATENCY_MS), "--watchdog-ms", "500",
+                             "--telemetry", str(tel_path)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     try:
         deadline = time.monotonic() + 30

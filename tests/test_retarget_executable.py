@@ -140,3 +140,20 @@ def test_cli_tempo_answers(tmp_path, capsys):
     code = main(["retarget", str(dance), "--legs", "whole", "--tempo-cap", "1", "-o", str(tmp_path / "c.npz")])
     out = capsys.readouterr().out
     assert code == 1 and "not executable" in out and (tmp_path / "c.npz").is_file()
+
+
+def test_a_clip_that_never_touches_the_floor_is_one_line_and_exit_2(tmp_path, capsys):
+    """A motion floating a metre up (no contact frame at all): nothing to stand on, so no tempo or
+    stance can help; a one-line error, exit 2, nothing written."""
+    from motion2robot.motion.human import SMPL22
+    T = 40
+    pos = np.zeros((T, len(SMPL22), 3))
+    pos[..., 1] = np.linspace(0, 1, len(SMPL22))[None, :]  # a vertical line of joints, y up
+    pos[..., 1] += 1.0 + 0.3 * np.sin(np.arange(T) / 5)[:, None]
+    pos[:, :, 0] = np.arange(T)[:, None] * 0.05  # and drifting: no foot is ever still
+    src = tmp_path / "floating.npy"
+    np.save(src, pos.astype(np.float32))
+    code = main(["retarget", str(src), "--format", "humanml3d_joints", "-o", str(tmp_path / "f.npz")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "floor" in err
+    assert not (tmp_path / "f.npz").exists()

@@ -28,9 +28,9 @@ class BatchConfig:
     """What every worker needs. robot: robot name or config path; physics: run the MuJoCo rollout;
     save_motions: folder for the retargeted motions (None: not saved); read_options: (name, value)
     pairs passed to ``read_motion`` (format, fps, mean, std, units, up, name_map); retarget_options:
-    (name, value) pairs of RetargetOptions fields (tempo, legs, tempo_cap, balance); check_options:
-    (name, value) pairs of CheckOptions fields (thresholds, sag compensation); job:
-    ``"module:attr"`` of the job object (None: :class:`~motion2robot.batch.feasibility.FeasibilityJob`)."""
+    (name, value) pairs of RetargetOptions fields (tempo, legs, tempo_cap, balance); job:
+    ``"module:attr"`` of the job object (None: :class:`~motion2robot.batch.feasibility.FeasibilityJob`);
+    check_options: (name, value) pairs of CheckOptions fields (thresholds, sag compensation)."""
 
     robot: str
     physics: bool = True

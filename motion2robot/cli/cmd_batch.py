@@ -38,8 +38,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     from motion2robot.cli.read_options import add_read_options
     from motion2robot.cli.retarget_options import add_retarget_options
 
-    add_check_options(p)
     add_retarget_options(p)
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 

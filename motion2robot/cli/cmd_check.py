@@ -29,8 +29,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="write a self-contained HTML report (verdict, reasons, plots, key frames)")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--clip", type=int, help="clip index of a multi-clip human motion file")
-    add_check_options(p)
     add_retarget_options(p)
+    add_check_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 

@@ -27,6 +27,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     show = sub.add_parser("show", help="joints with limits, servo IDs, mass, height, feet and keypoint map",
                           description="Show a robot: op3 | menagerie:NAME | path to an MJCF (with .toml beside) or TOML.")
     show.add_argument("name", help="robot name: op3 | menagerie:NAME | path to MJCF/TOML")
+    show.add_argument("--render", metavar="OUT.png",
+                      help="also draw the robot at its nominal pose with its keypoints and soles marked (offscreen: "
+                           "MUJOCO_GL=egl or osmesa)")
     show.set_defaults(func=_show)
     init = sub.add_parser(
         "init", help="draft a robot config (.toml) for a humanoid MJCF motion2robot has not seen",
@@ -63,6 +66,10 @@ def _list(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     robot = load_robot(args.name)
     print(describe_robot(robot))
+    if args.render:
+        from motion2robot.viz.keypoint_image import write_keypoint_image
+
+        print(f"\nwrote {write_keypoint_image(robot, args.render)} (keypoints: left blue, right red, trunk yellow; soles green)")
     return 0
 
 
@@ -126,8 +133,17 @@ def _init(args: argparse.Namespace) -> int:
         raise UserError(f"{out}: already exists; pass --force to overwrite it or choose another -o path")
     name = args.name or out.stem
     draft = draft_config(args.model, name=name)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise UserError(f"{out.parent}: cannot create the output folder ({err.strerror}); choose another -o path") from err
     write_draft(draft, out)
     print(f"wrote {out} (draft config for {args.model}: {draft.n_joints} hinges)")
+    print("\nkeypoints:")
+    rows = [("HUMAN", "ROBOT BODY", "OFFSET m", "WHY")]
+    for k in draft.keypoints:
+        rows.append((k.human, k.body, "(" + ", ".join(f"{v:+.3f}" for v in k.offset) + ")", k.note or "-"))
+    print("\n".join("  " + ln for ln in _table(rows, emit=False)))
     print("\nguessed:")
     for g in draft.guesses:
         print(f"  - {g}")

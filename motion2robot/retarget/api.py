@@ -54,6 +54,7 @@ from motion2robot.retarget.smoothing import (
     smooth_hinges,
     smooth_jointly,
     smooth_to_targets,
+    spread_correction,
 )
 from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, objective
 from motion2robot.retarget.targets import frame_params, initial_qpos
@@ -66,6 +67,8 @@ from motion2robot.robot_motion import RobotMotion
 TEMPORAL_REFERENCE_FPS = 20.0
 #: Rounds of the ZMP planning stage at most.
 ZMP_ROUNDS = 2
+#: The ZMP planning stage is tried when the ZMP leaves the soles by at most this many sole lengths.
+ZMP_REACH = 2.0
 #: What ``legs`` may be.
 LEGS = ("auto", "whole", "stance")
 #: Factor on the floor weight in the first (free-feet) stage.
@@ -166,6 +169,13 @@ def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.nda
     }
 
 
+def _free_limbs(robot: Robot) -> np.ndarray:
+    """(n,) bool hinges on no path from the root to a foot (arms, head, waist above the legs)."""
+    from motion2robot.validate.dynamics import foot_ancestor_mask
+
+    return ~foot_ancestor_mask(robot).any(axis=1)
+
+
 def _rate_weights(w: Weights, fps: float) -> Weights:
     """The temporal weights act on per-frame differences, which shrink as the rate grows: scaled by
     (fps / TEMPORAL_REFERENCE_FPS)^2 so a finer output rate does not loosen them (at 100 fps
@@ -213,6 +223,11 @@ def _dynamic_balance(problem: CompiledProblem, kp: np.ndarray, labels: np.ndarra
     Q0, violation = Q, np.zeros(len(Q))
     zmp, com = multibody_zmp(Q, fps, robot)
     figures["zmp_outside_before_m"] = before = outside(zmp)
+    reach = ZMP_REACH * 2.0 * max(max(f.sole_half) for f in robot.config.feet)
+    if before > reach:  # spikes of a motion this fast are not a CoM shift away: not worth the rounds
+        figures["zmp_outside_after_m"] = before
+        figures["skipped"] = f"the ZMP is {before:.2f} m outside the soles, beyond {reach:.2f} m"
+        return Q, figures
     for _ in range(ZMP_ROUNDS):
         d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps)
         if np.abs(d).max() < MIN_SHIFT:
@@ -263,6 +278,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     T = human.num_frames
     where = human.meta.get("source", "the motion")
     _require_solvable(human)
+    where = human.meta.get("source", "the motion")
     t_all = time.perf_counter()
     problem = compiled_problem(robot, opt.backend)
     native.library()  # the smoothing/clamp kernels: built on first use, like the problem's code
@@ -328,7 +344,11 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     if opt.smoothing:  # one filter for root and hinges together removes the solves' kinks; a last
         # projection takes the planted soles back where the filter moved them (to second order)
         Q = _smooth_configuration(Q, robot, human.fps, targets, root_target)
+        smooth = Q
         Q, _ = correct(problem, P2, Q, lo, hi, max_step, 1, extra=EXTRA_CORRECTIONS)
+        # the projection's pushes on free limbs (self-collision) spread over neighbouring frames
+        Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], _free_limbs(robot), human.fps)
+        Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps), lo, hi)
         pts = None
     zmp_figures = None
     if opt.balance and opt.dynamic_balance and opt.contacts:  # the ZMP, not only the CoM, inside the soles

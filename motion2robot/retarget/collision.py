@@ -9,7 +9,7 @@ nominal posture. Mesh bodies get capsules fitted to their vertices (:mod:`~motio
 
 Boxes get a capsule containing them (over the whole length, radius the cross
 half-diagonal) unless that capsule already touches the other one at the nominal posture, when the
-inscribed capsule is used. Pairs of a body and its parent, and pairs already touching at the nominal posture, are left out
+inscribed capsule is used. Pairs MuJoCo does not test (:mod:`~motion2robot.robot.collision_filter`), and pairs already touching at the nominal posture, are left out
 (overlaps of the model's hulls by design); pairs the nominal posture holds closer than
 :data:`NOMINAL_CLEARANCE` get that much clearance at the nominal posture (their capsules overstate
 the hulls). Capsule distance = segment distance - radii (exact);
@@ -27,6 +27,7 @@ import numpy as np
 
 from motion2robot.retarget.capsule_fit import fit_capsule
 from motion2robot.retarget.polytope import BodyPolytope, body_polytope, clearance_np, clearance_sx
+from motion2robot.robot.collision_filter import tested_body_pairs
 from motion2robot.robot.kinematics import quat_to_mat_np
 from motion2robot.robot.robot import Robot
 
@@ -264,12 +265,13 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
             return clearance_np(y, (d.xpos[y.body], d.xmat[y.body].reshape(3, 3)), *world(x), x.radius) - MARGIN
         return _gap_np(world(x), world(y)) - x.radius - y.radius - MARGIN
 
+    tested = tested_body_pairs(m)  # the pairs MuJoCo tests: no others are kept apart
     out = []
     seen: set[tuple[int, int]] = set()
     for ga, gb in groups:
         for a in limbs.get(ga, []):
             for b in limbs.get(gb, []):
-                if a not in caps or b not in caps or m.body_parentid[a] == b or m.body_parentid[b] == a \
+                if a not in caps or b not in caps or (min(a, b), max(a, b)) not in tested \
                         or (min(a, b), max(a, b)) in seen:
                     continue
                 seen.add((min(a, b), max(a, b)))

@@ -14,8 +14,8 @@ This covers what capsules cannot: the G1's pelvis and hip-roll links are 26 mm a
 nominal posture but any capsules or polytopes containing them already touch there, so the capsule
 model leaves the pair out (:func:`~motion2robot.retarget.collision.collision_pairs`), and a dance
 put a hip-roll link 15 mm into the pelvis; its wrist links meet at the ends of their ranges.
-Pairs considered: those the validator judges (:func:`~motion2robot.validate.collision.ignored_body_pairs`
-and the MJCF's ``<exclude>`` pairs left out) that no capsule pair models. Pairs whose geoms never
+Pairs considered: those the validator judges (the pairs MuJoCo tests,
+:func:`~motion2robot.validate.collision.ignored_body_pairs` left out) that no capsule pair models. Pairs whose geoms never
 meet within the ranges get no cut (the OP3 has none: its closest, knee and ankle-roll links, stay
 1 mm apart at the corner of the ankle's ranges). The maps are cached on disk.
 """
@@ -32,7 +32,7 @@ import numpy as np
 
 from motion2robot.robot.robot import Robot
 from motion2robot.util.cache import cache_dir, write_atomic
-from motion2robot.validate.collision import ignored_body_pairs
+from motion2robot.validate.collision import ignored_body_pairs, pair_table
 from motion2robot.validate.models import body_name, check_model, collidable_bodies
 
 #: Grid points per joint (two joints: GRID x GRID postures; one joint: GRID ** 2 / 16).
@@ -81,16 +81,12 @@ def _path_joints(m: mujoco.MjModel, a: int, b: int) -> list[int] | None:
     return joints if all(int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE) for j in joints) else None
 
 
-def _excluded(m: mujoco.MjModel) -> set[tuple[int, int]]:
-    return {tuple(sorted((int(s) >> 16, int(s) & 0xFFFF))) for s in m.exclude_signature}
-
-
 def candidate_pairs(robot: Robot, modelled: set[tuple[int, int]]) -> list[tuple[int, int, list[int]]]:
     """(a, b, joints) for the body pairs (a < b) the validator judges, not in ``modelled``, with
     one or two hinges on the path between them."""
     m = check_model(robot)
     coll = np.flatnonzero(collidable_bodies(m))
-    skip = set(ignored_body_pairs(robot)) | _excluded(m) | set(modelled)
+    skip = set(ignored_body_pairs(robot)) | set(modelled)
     out = []
     for i, a in enumerate(coll):
         for b in coll[i + 1:]:
@@ -107,8 +103,10 @@ def _distance_fn(robot: Robot, a: int, b: int, joints: list[int]):
     """(q (k,), distmax) -> the smallest distance (m, capped at distmax) between the two bodies' geoms."""
     m = check_model(robot)
     d = mujoco.MjData(m)
+    judged = pair_table(robot).judged
     geoms = [[g for g in range(m.ngeom) if int(m.geom_bodyid[g]) == x and (m.geom_contype[g] or m.geom_conaffinity[g])]
              for x in (a, b)]
+    pairs = [(x, y) for x in geoms[0] for y in geoms[1] if judged[x, y]]
     adr = [int(m.jnt_qposadr[j]) for j in joints]
     fromto = np.zeros(6)
 
@@ -116,7 +114,7 @@ def _distance_fn(robot: Robot, a: int, b: int, joints: list[int]):
         d.qpos[:] = robot.nominal_qpos
         d.qpos[adr] = q
         mujoco.mj_kinematics(m, d)
-        return min(mujoco.mj_geomDistance(m, d, x, y, distmax, fromto) for x in geoms[0] for y in geoms[1])
+        return min(mujoco.mj_geomDistance(m, d, x, y, distmax, fromto) for x, y in pairs)
     return dist
 
 

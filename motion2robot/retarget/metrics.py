@@ -30,26 +30,23 @@ def peak_acceleration(hinge: np.ndarray, fps: float) -> float:
 
 
 def _self_collision_depth(robot: Robot, qpos: np.ndarray) -> np.ndarray:
-    """(T,) deepest robot-robot penetration per frame (m), validator's ignored pairs excluded."""
-    from motion2robot.validate.collision import ignored_body_pairs
-    from motion2robot.validate.models import check_model, floor_geom
+    """(T,) deepest robot-robot penetration per frame (m) as the validator judges it: geom pairs
+    MuJoCo tests, beyond their overlap at the nominal posture."""
+    from motion2robot.validate.collision import pair_table
+    from motion2robot.validate.models import check_model
 
     m = check_model(robot)
     d = mujoco.MjData(m)
-    floor = floor_geom(m)
-    ignore = ignored_body_pairs(robot)
+    table = pair_table(robot)
     out = np.zeros(len(qpos))
     for t, q in enumerate(qpos):
         d.qpos[:] = q
         mujoco.mj_kinematics(m, d)
         mujoco.mj_collision(m, d)
-        for c in d.contact[:d.ncon]:
-            g1, g2 = int(c.geom[0]), int(c.geom[1])
-            if floor in (g1, g2):
-                continue
-            pair = tuple(sorted((int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2]))))
-            if pair not in ignore:
-                out[t] = max(out[t], -float(c.dist))
+        if d.ncon:
+            con = d.contact[:d.ncon]
+            excess = table.excess(con.geom[:, 0], con.geom[:, 1], con.dist)
+            out[t] = max(0.0, float(excess.max()))
     return out
 
 

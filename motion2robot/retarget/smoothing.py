@@ -117,37 +117,47 @@ def _smooth(r: np.ndarray, u: np.ndarray, m: np.ndarray) -> np.ndarray:
     return pentadiagonal_solve(d0, d1, d2, r)
 
 
+def _steps(shape: tuple[int, ...], vtarget, atarget, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame speed and acceleration targets ((k,) per frame and per frame squared)."""
+    return (np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, shape),
+            np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, shape))
+
+
+def _irls(r: np.ndarray, vstep: np.ndarray, astep: np.ndarray, iterations: int, shared: bool) -> np.ndarray:
+    """Iteratively reweighted smoothing of ``r`` (T, k): the weights of rows over their targets
+    grow until none is (or ``iterations`` ran out); ``shared``: one weight per row for all columns."""
+    T, k = r.shape
+    cols = 1 if shared else k
+    u, m = np.zeros((T - 1, cols)), np.zeros((T - 2, cols))
+    y = r
+    for _ in range(iterations):
+        rv = np.abs(np.diff(y, axis=0)) / vstep
+        ra = np.abs(np.diff(y, 2, axis=0)) / astep
+        if shared:
+            rv, ra = rv.max(axis=1, keepdims=True), ra.max(axis=1, keepdims=True)
+        if rv.max() <= 1.0 and ra.max() <= 1.0:
+            break
+        u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
+        m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
+        y = _smooth(r, np.broadcast_to(u, (T - 1, k)), np.broadcast_to(m, (T - 2, k)))
+    return y
+
+
 def smooth_to_targets(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float,
                       iterations: int = 16) -> np.ndarray:
     """(T, k) trajectories near ``x`` with speed <= ``vtarget`` and acceleration <= ``atarget``
     ((k,) per second and per second squared, in x's unit; inf = no target) where the reweighting
     reached them. Columns already within both targets are returned unchanged."""
     out = np.array(x, dtype=np.float64)
-    T = len(out)
-    if T < 3:
+    if len(out) < 3:
         return out
-    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
-    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
+    vstep, astep = _steps(out.shape[1:], vtarget, atarget, fps)
     cols = np.flatnonzero((np.abs(np.diff(out, axis=0)) > vstep).any(axis=0)
                           | (np.abs(np.diff(out, 2, axis=0)) > astep).any(axis=0))
     if len(cols):
         r = out[:, cols]
         fast = native.smooth_irls(r, vstep[cols], astep[cols], iterations)
-        if fast is not None:
-            out[:, cols] = fast
-            return out
-        u = np.zeros((T - 1, len(cols)))
-        m = np.zeros((T - 2, len(cols)))
-        y = r
-        for _ in range(iterations):
-            rv = np.abs(np.diff(y, axis=0)) / vstep[cols]
-            ra = np.abs(np.diff(y, 2, axis=0)) / astep[cols]
-            if rv.max() <= 1.0 and ra.max() <= 1.0:
-                break
-            u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
-            m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
-            y = _smooth(r, u, m)
-        out[:, cols] = y
+        out[:, cols] = fast if fast is not None else _irls(r, vstep[cols], astep[cols], iterations, shared=False)
     return out
 
 
@@ -169,20 +179,36 @@ def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps:
     moves only to second order in the smoothed-away deviation: single-frame kinks the per-frame
     solves leave are removed without the projection that would put them back."""
     out = np.array(x, dtype=np.float64)
-    T = len(out)
-    if T < 3:
+    if len(out) < 3:
         return out
-    vstep = np.broadcast_to(np.asarray(vtarget, dtype=float) / fps, out.shape[1:])
-    astep = np.broadcast_to(np.asarray(atarget, dtype=float) / fps ** 2, out.shape[1:])
-    u = np.zeros((T - 1, 1))
-    m = np.zeros((T - 2, 1))
-    y = out
-    for _ in range(iterations):
-        rv = (np.abs(np.diff(y, axis=0)) / vstep).max(axis=1, keepdims=True)
-        ra = (np.abs(np.diff(y, 2, axis=0)) / astep).max(axis=1, keepdims=True)
-        if rv.max() <= 1.0 and ra.max() <= 1.0:
-            break
-        u = np.where(rv > 1.0, (u + 1.0) * rv * rv, u)
-        m = np.where(ra > 1.0, (m + 1.0) * ra * ra, m)
-        y = _smooth(out, np.repeat(u, out.shape[1], axis=1), np.repeat(m, out.shape[1], axis=1))
-    return y
+    vstep, astep = _steps(out.shape[1:], vtarget, atarget, fps)
+    return _irls(out, vstep, astep, iterations, shared=True)
+
+
+def spread_correction(before: np.ndarray, after: np.ndarray, joints: np.ndarray, fps: float,
+                      half_width: float = 0.2) -> np.ndarray:
+    """``after`` (T, n) hinge angles with the correction ``after - before`` of the ``joints`` (n,)
+    bool spread in time: each frame's correction becomes a raised-cosine bump of ``half_width``
+    seconds, and every joint takes, per sign, the largest bump over the frames near it. Every
+    frame keeps at least its own correction (same sign, same or larger size), so a limb pushed out
+    of the body stays out, but a push confined to one frame no longer makes a one-frame spike
+    (the projections onto self-collision do exactly that). Meant for joints that no equality
+    constraint holds (arms, head), where a larger push in the same direction is still feasible."""
+    out = np.array(after, dtype=np.float64)
+    if not np.any(joints) or len(out) < 3:
+        return out
+    w = max(1, int(round(half_width * fps)))
+    offsets = np.arange(-w, w + 1)
+    bump = 0.5 + 0.5 * np.cos(np.pi * offsets / (w + 1))            # (2w+1,), 1 at the centre
+    d = (after - before)[:, joints]
+    T = len(d)
+    pos = np.zeros_like(d)
+    neg = np.zeros_like(d)
+    for k, b in zip(offsets, bump):  # envelope(s) = max_t d(t) bump(s - t)
+        src = np.clip(np.arange(T) - k, 0, T - 1)
+        valid = ((np.arange(T) - k) >= 0) & ((np.arange(T) - k) < T)
+        shifted = np.where(valid[:, None], d[src], 0.0) * b
+        pos = np.maximum(pos, shifted)
+        neg = np.minimum(neg, shifted)
+    out[:, joints] = before[:, joints] + pos + neg
+    return out

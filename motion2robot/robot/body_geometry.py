@@ -42,8 +42,17 @@ def to_body(data: mujoco.MjData, body: int, world_point: np.ndarray) -> np.ndarr
     return data.xmat[body].reshape(3, 3).T @ (np.asarray(world_point, float) - data.xpos[body])
 
 
+#: The geom group MuJoCo Menagerie models put their collision geoms in.
+COLLISION_GROUP = 3
+
+
 def is_collision(model: mujoco.MjModel, g: int) -> bool:
-    return bool(model.geom_contype[g] or model.geom_conaffinity[g])
+    """Whether geom ``g`` is collision geometry: contype or conaffinity set; in a model that sets
+    them on no geom at all (collisions by explicit pairs, or collision geoms marked by class), a
+    geom of an explicit ``<pair>`` or of group :data:`COLLISION_GROUP`."""
+    if model.geom_contype.any() or model.geom_conaffinity.any():
+        return bool(model.geom_contype[g] or model.geom_conaffinity[g])
+    return bool(model.geom_group[g] == COLLISION_GROUP or g in model.pair_geom1 or g in model.pair_geom2)
 
 
 def body_geoms(model: mujoco.MjModel, body: int, collision_only: bool = True) -> list[int]:
@@ -89,14 +98,37 @@ def aabb_corners(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndarr
     return data.geom_xpos[g] + (center + signs * half) @ rot.T
 
 
+def sole_frame(data: mujoco.MjData, body: int) -> np.ndarray:
+    """(3, 3) rotation of the sole frame in ``body``'s frame: z the world's up, x the world's
+    forward (+x) laid into the floor plane (the body's own axes when they are already so)."""
+    rot = data.xmat[body].reshape(3, 3)
+    up = rot.T @ np.array([0.0, 0.0, 1.0])
+    fwd = rot.T @ np.array([1.0, 0.0, 0.0])
+    fwd = fwd - (fwd @ up) * up
+    if np.linalg.norm(fwd) < 1e-6:
+        fwd = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    fwd /= np.linalg.norm(fwd)
+    return np.stack([fwd, np.cross(up, fwd), up], axis=1)
+
+
+def mat_to_quat(rot: np.ndarray) -> np.ndarray:
+    """wxyz quaternion of a rotation matrix (w >= 0)."""
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rot, dtype=float).ravel())
+    return q if q[0] >= 0 else -q
+
+
 def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, body: int, geoms: list[int],
-                   tol: float = 0.005) -> tuple[np.ndarray, np.ndarray, int]:
-    """Sole of a foot: the rectangle, in ``body``'s frame, covering the points of ``geoms`` that lie
-    within ``tol`` (m) of their lowest point. Returns (centre (3,), half extents (2,), point count)."""
+                   tol: float = 0.005) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """Sole of a foot: the rectangle covering the points of ``geoms`` within ``tol`` (m) of their
+    lowest point, in the floor plane at the current pose whatever the body's axes
+    (:func:`sole_frame`). Returns (centre (3,) in ``body``'s frame, half extents (2,) along the
+    sole frame's x and y, point count, sole frame rotation (3, 3) in the body frame)."""
     pts = np.concatenate([geom_points(model, data, g) for g in geoms])
     low = pts[pts[:, 2] <= pts[:, 2].min() + tol]
-    local = np.array([to_body(data, body, p) for p in low])
+    frame = sole_frame(data, body)
+    local = np.array([to_body(data, body, p) for p in low]) @ frame  # sole-frame coordinates
     lo, hi = local.min(0), local.max(0)
-    z = float(to_body(data, body, pts[np.argmin(pts[:, 2])])[2])
-    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, z])
-    return centre, (hi[:2] - lo[:2]) / 2, len(low)
+    z = float(to_body(data, body, pts[np.argmin(pts[:, 2])]) @ frame[:, 2])
+    centre = frame @ np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, z])
+    return centre, (hi[:2] - lo[:2]) / 2, len(low), frame

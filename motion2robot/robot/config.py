@@ -36,6 +36,8 @@ the MJCF's)::
     body = "l_ank_roll_link"
     sole_center = [0.024, 0.013, -0.0305]   # centre of the sole's bottom face
     sole_half = [0.0635, 0.039]             # half length (body x) and half width (body y)
+    # sole_quat = [1, 0, 0, 0]              # optional: the sole's frame in the body frame (wxyz),
+                                            # for feet whose body axes are not along the sole
 
     [scale]                         # optional overrides of the automatic human->robot scale
     legs = 0.45
@@ -72,7 +74,7 @@ _MODEL_KEYS = {"mjcf", "menagerie", "entry", "root_body", "torso_body"}
 _DEFAULT_KEYS = {"velocity", "torque", "kp"}
 _JOINT_KEYS = {"range", "velocity", "torque", "reason", "kp"}
 _KP_KEYS = {"body", "site", "offset", "weight"}
-_FOOT_KEYS = {"body", "sole_center", "sole_half"}
+_FOOT_KEYS = {"body", "sole_center", "sole_half", "sole_quat"}
 _SCALE_KEYS = {"legs", "arms", "height"}
 _SERVO_KEYS = {"model", "baud", "ticks_per_rev", "center", "ids", "sign", "offset"}
 
@@ -109,12 +111,22 @@ class FootConfig:
     body: str
     sole_center: tuple[float, float, float]
     sole_half: tuple[float, float]
+    sole_quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)  # sole frame in the body frame (wxyz)
 
     def corners(self) -> tuple[tuple[float, float, float], ...]:
-        """The four sole corners in the foot body's frame (front-left, front-right, back-right, back-left)."""
-        cx, cy, cz = self.sole_center
+        """The four sole corners in the foot body's frame (front-left, front-right, back-right,
+        back-left): the rectangle lies in the x/y plane of the sole frame (``sole_quat``, the
+        body's own frame unless the config says otherwise), centred on ``sole_center``."""
+        w, x, y, z = self.sole_quat
+        rot = ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+               (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+               (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
         hx, hy = self.sole_half
-        return ((cx + hx, cy + hy, cz), (cx + hx, cy - hy, cz), (cx - hx, cy - hy, cz), (cx - hx, cy + hy, cz))
+        out = []
+        for sx, sy in ((1, 1), (1, -1), (-1, -1), (-1, 1)):
+            u, v = sx * hx, sy * hy
+            out.append(tuple(c + r[0] * u + r[1] * v for c, r in zip(self.sole_center, rot)))
+        return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -256,13 +268,18 @@ def parse_config(data: Mapping[str, Any], path: Path | None = None) -> RobotConf
             raise fail(f"missing [feet.{side}] (foot body and sole rectangle); the retargeter and the balance check need both feet")
         ft = feet_t[side]
         check_keys(ft, _FOOT_KEYS, f"feet.{side}")
-        for key in _FOOT_KEYS:
+        for key in _FOOT_KEYS - {"sole_quat"}:
             if key not in ft:
                 raise fail(f"[feet.{side}] is missing '{key}'")
         half = vec(ft["sole_half"], 2, f"feet.{side}.sole_half")
         if min(half) <= 0:
             raise fail(f"feet.{side}.sole_half must be positive")
-        feet.append(FootConfig(side, str(ft["body"]), vec(ft["sole_center"], 3, f"feet.{side}.sole_center"), half))
+        quat = vec(ft.get("sole_quat", [1.0, 0.0, 0.0, 0.0]), 4, f"feet.{side}.sole_quat")
+        norm = math.sqrt(sum(q * q for q in quat))
+        if norm < 1e-6:
+            raise fail(f"feet.{side}.sole_quat must be a rotation quaternion (w, x, y, z), not zero")
+        feet.append(FootConfig(side, str(ft["body"]), vec(ft["sole_center"], 3, f"feet.{side}.sole_center"), half,
+                               tuple(q / norm for q in quat)))
 
     scale = data.get("scale", {})
     check_keys(scale, _SCALE_KEYS, "scale")

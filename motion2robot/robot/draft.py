@@ -41,7 +41,7 @@ from motion2robot.robot.config import parse_config
 from motion2robot.robot.draft_toml import render
 from motion2robot.robot.draft_tree import Skeleton
 from motion2robot.robot.draft_types import Draft, FootDraft, JointDraft, KeypointDraft
-from motion2robot.robot.loader import build_robot
+from motion2robot.robot.loader import build_robot, mjcf_error
 from motion2robot.robot.resolve import MENAGERIE_PREFIX, menagerie_mjcf
 
 __all__ = ["Draft", "JointDraft", "KeypointDraft", "FootDraft", "draft_config", "write_draft"]
@@ -54,7 +54,7 @@ def draft_config(model: str | Path, name: str | None = None) -> Draft:
     try:
         m = mujoco.MjModel.from_xml_path(str(mjcf))
     except Exception as err:
-        raise RobotConfigError(f"{mjcf}: MuJoCo cannot read this MJCF ({' '.join(str(err).split())}); fix the model file") from err
+        raise mjcf_error(mjcf, err) from err
     d = mujoco.MjData(m)
     d.qpos[:] = m.qpos0
     mujoco.mj_kinematics(m, d)

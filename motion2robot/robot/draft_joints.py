@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from motion2robot.robot.collision_filter import tested_geom_pairs
 from motion2robot.robot.draft_types import JointDraft
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -82,6 +83,17 @@ def draft_joints(skel: "Skeleton") -> tuple[list[JointDraft], float, float, floa
     kp_default = float(np.median([jd.kp for jd in out])) if out else 20.0
     return out, DEFAULT_VELOCITY, round(default_t, 3), round(kp_default, 3)
 
+def round_inside(v: float, lo: float, hi: float, nd: int = 4) -> float:
+    """``v`` rounded to ``nd`` decimals, towards the inside of [lo, hi] where plain rounding would
+    leave it (Talos: 0.008727 rounds to 0.0087, below its lower limit)."""
+    r, step = round(v, nd), 10.0 ** -nd
+    if r < lo:
+        r = np.ceil(lo / step) * step
+    if r > hi:
+        r = np.floor(hi / step) * step
+    return round(float(r), nd + 2) + 0.0
+
+
 def draft_nominal(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft]) -> dict:
     """Zeros (clipped into the ranges) with the knees bent :data:`KNEE_BEND` where the hip, knee and
     ankle pitch joints are found: hip and ankle pitch -KNEE_BEND/2, so pelvis and soles stay level."""
@@ -104,16 +116,129 @@ def draft_nominal(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft]) -
         want = {hip: -KNEE_BEND / 2, knee: KNEE_BEND, ankle: -KNEE_BEND / 2}  # rotations about world +y
         q = {j: phi / float(np.sign(skel.d.xaxis[j][1])) for j, phi in want.items()}
         if all(bounds(j)[0] <= v <= bounds(j)[1] for j, v in q.items()):
-            nominal.update({skel.jname(j): round(v, 4) for j, v in q.items()})
+            nominal.update({skel.jname(j): round_inside(v, *bounds(j)) for j, v in q.items()})
         else:
             skel.checks.append(f"{s} leg: a {KNEE_BEND} rad knee bend is outside the joint ranges; nominal knees left straight")
     for j in range(1, m.njnt):
         lo, hi = bounds(j)
         if not lo <= 0.0 <= hi and skel.jname(j) not in nominal:
-            nominal[skel.jname(j)] = round(float(np.clip(0.0, lo, hi)), 4)
+            nominal[skel.jname(j)] = round_inside(float(np.clip(0.0, lo, hi)), lo, hi)
     skel.guesses.append("nominal: " + (", ".join(f"{k} = {v:+.3f}" for k, v in nominal.items()) or "all zero")
                         + "; arms as in the model's zero pose")
     return nominal
+
+
+#: m; the nominal posture keeps each arm this far from the trunk and legs (where its range allows).
+ARM_CLEARANCE = 0.03
+
+
+def clear_arms(skel: "Skeleton", arms: dict, joints: dict[str, JointDraft], nominal: dict, step: float = 0.05,
+               most: float = 0.6) -> dict:
+    """Abduct each arm (its shoulder joint whose axis runs along x) in ``step`` rad steps, up to
+    ``most``, while the bodies below that joint are closer than :data:`ARM_CLEARANCE` to the rest
+    of the robot at the nominal posture and abducting helps (Talos' hands rest in its thighs and
+    the G1's upper arms touch its torso at qpos0: a retargeter must keep those apart from the
+    start). Distances between the geom pairs MuJoCo tests (``mj_geomDistance``)."""
+    m = skel.m
+    d = mujoco.MjData(m)
+    out = dict(nominal)
+    tested = tested_geom_pairs(m)
+    fromto = np.zeros(6)
+
+    def gap(pairs: list[tuple[int, int]]) -> float:
+        d.qpos[:] = m.qpos0
+        for j in range(1, m.njnt):
+            d.qpos[m.jnt_qposadr[j]] = out.get(skel.jname(j), d.qpos[m.jnt_qposadr[j]])
+        mujoco.mj_kinematics(m, d)
+        return min((mujoco.mj_geomDistance(m, d, a, b, ARM_CLEARANCE, fromto) for a, b in pairs), default=ARM_CLEARANCE)
+
+    for side, arm in arms.items():
+        if "roll" not in arm:
+            continue
+        j = arm["roll"]
+        below = set(skel.subtree(int(m.jnt_bodyid[j]))) - {int(m.jnt_bodyid[j])}
+        rest = set(range(1, m.nbody)) - set(arm["bodies"])
+        pairs = [(a, b) for a in range(m.ngeom) if int(m.geom_bodyid[a]) in below
+                 for b in range(m.ngeom) if int(m.geom_bodyid[b]) in rest and tested[a, b]]
+        name = skel.jname(j)
+        jd = joints[name]
+        lo, hi = jd.range if jd.range else (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1]))
+        sign = (1.0 if side == "left" else -1.0) / float(np.sign(skel.d.xaxis[j][0]))  # outwards
+        start = out.get(name, 0.0)
+        moved, now = 0.0, gap(pairs)
+        while now < ARM_CLEARANCE and moved < most - 1e-9:
+            v = start + sign * (moved + step)
+            if not lo <= v <= hi:
+                break
+            out[name] = round_inside(v, lo, hi)
+            after = gap(pairs)
+            if after <= now + 1e-4:  # abducting does not help
+                out[name] = round_inside(start + sign * moved, lo, hi) if moved else start
+                break
+            moved, now = moved + step, after
+        if moved:
+            skel.guesses.append(f"{side} arm {1000 * now:.0f} mm from the body at the nominal pose after abducting it: "
+                                f"{name} = {out[name]:+.3f}")
+    return out
+
+
+#: m; the nominal stance keeps the feet this far apart (where hip and ankle roll joints allow).
+FEET_CLEARANCE = 0.03
+
+
+def spread_feet(skel: "Skeleton", legs: dict, joints: dict[str, JointDraft], nominal: dict, step: float = 0.005,
+                most: float = 0.1) -> dict:
+    """Roll both legs outwards at the hips, and the ankles back so the soles stay flat, in ``step``
+    rad steps up to ``most``, while the feet are closer than :data:`FEET_CLEARANCE` at the nominal
+    posture (the OP3's are 17 mm apart at qpos0, where a retargeter has no room to keep them
+    apart). Distances between the geom pairs MuJoCo tests."""
+    m = skel.m
+    d = mujoco.MjData(m)
+    tested = tested_geom_pairs(m)
+    fromto = np.zeros(6)
+
+    def roll(bodies: list[int]) -> int | None:
+        ids = [j for j in range(1, m.njnt) if int(m.jnt_bodyid[j]) in bodies and abs(skel.d.xaxis[j][0]) > 0.9]
+        return ids[0] if ids else None
+
+    hips = {s: roll(leg["hip"]) for s, leg in legs.items()}
+    ankles = {s: roll(leg["ankle"]) for s, leg in legs.items()}
+    if None in hips.values() or None in ankles.values():
+        return nominal
+    feet = [set(skel.subtree(mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, legs[s]["foot"].body))) for s in ("left", "right")]
+    pairs = [(a, b) for a in range(m.ngeom) if int(m.geom_bodyid[a]) in feet[0]
+             for b in range(m.ngeom) if int(m.geom_bodyid[b]) in feet[1] and tested[a, b]]
+
+    def posture(a: float) -> dict | None:
+        out = dict(nominal)
+        for s, sign in (("left", 1.0), ("right", -1.0)):
+            for j, phi in ((hips[s], sign * a), (ankles[s], -sign * a)):
+                jd = joints[skel.jname(j)]
+                lo, hi = jd.range if jd.range else (float(m.jnt_range[j, 0]), float(m.jnt_range[j, 1]))
+                v = out.get(skel.jname(j), 0.0) + phi / float(np.sign(skel.d.xaxis[j][0]))
+                if not lo <= v <= hi:
+                    return None
+                out[skel.jname(j)] = round_inside(v, lo, hi)
+        return out
+
+    def gap(q: dict) -> float:
+        d.qpos[:] = m.qpos0
+        for j in range(1, m.njnt):
+            d.qpos[m.jnt_qposadr[j]] = q.get(skel.jname(j), d.qpos[m.jnt_qposadr[j]])
+        mujoco.mj_kinematics(m, d)
+        return min((mujoco.mj_geomDistance(m, d, a, b, FEET_CLEARANCE, fromto) for a, b in pairs), default=FEET_CLEARANCE)
+
+    best, a = nominal, 0.0
+    while gap(best) < FEET_CLEARANCE and a < most - 1e-9:
+        a += step
+        q = posture(a)
+        if q is None:
+            break
+        best = q
+    if best is not nominal:
+        skel.guesses.append(f"feet {1000 * gap(best):.0f} mm apart at the nominal pose after rolling the legs out "
+                            f"{a:.3f} rad at the hips (ankles back, soles flat)")
+    return best
 
 
 def stiffen_ankles(skel: "Skeleton", legs: dict, joints: list[JointDraft]) -> list[JointDraft]:

@@ -95,4 +95,6 @@ def render(draft: "Draft", mjcf_ref: str | None) -> str:
     for f in draft.feet:
         out += ["", *comment(f.note), f"[feet.{f.side}]", f"body = {value(f.body)}",
                 f"sole_center = {value(list(f.sole_center))}", f"sole_half = {value(list(f.sole_half))}"]
+        if f.sole_quat is not None:
+            out += [f"sole_quat = {value(list(f.sole_quat))}"]
     return "\n".join(out) + "\n"

@@ -9,7 +9,8 @@ import numpy as np
 
 from motion2robot.errors import RobotConfigError
 from motion2robot.robot import body_geometry as geo
-from motion2robot.robot.draft_joints import draft_joints, draft_nominal, stiffen_ankles
+from motion2robot.robot.draft_joints import clear_arms, draft_joints, draft_nominal, spread_feet, stiffen_ankles
+from motion2robot.robot.draft_limb import MEET_TOL, group_joints, pick_shoulder_elbow_wrist
 from motion2robot.robot.draft_types import Draft, FootDraft, KeypointDraft, rounded
 
 _HINGE = mujoco.mjtJoint.mjJNT_HINGE
@@ -89,20 +90,32 @@ class Skeleton:
         split = self._lca(feet["left"], feet["right"])
         legs = {s: self._leg(s, feet[s], split) for s in ("left", "right")}
         leg_bodies = set(sum((self.subtree(legs[s]["chain"][0]) for s in legs), []))
-        arms = {s: self._arm(s, [b for b in leaves if b not in leg_bodies]) for s in ("left", "right")}
-        torso = self._lca(arms["left"]["leaf"], arms["right"]["leaf"])
-        named_torso = self.named(self.path(torso) or [self.root], "torso", "chest")
-        self.guesses.append(f"torso body: {self.bname(torso)} (where the arms branch"
-                            + ("" if not named_torso or named_torso[-1] == torso else f"; named torso: {self.bname(named_torso[-1])}") + ")")
-        kps = [self.kp("pelvis", self.root)]
+        upper = [b for b in leaves if b not in leg_bodies]
+        sides = {s: [b for b in upper if (1.0 if s == "left" else -1.0) * self.side(b) > 0.03] for s in ("left", "right")}
+        kps = [self._pelvis(legs)]
         for s in ("left", "right"):
             kps += legs[s]["kps"]
-        kps += self._trunk(torso, arms, legs, leg_bodies)
-        for s in ("left", "right"):
-            kps += arms[s]["kps"]
+        if all(sides.values()):
+            arms = {s: self._arm(s, sides[s]) for s in ("left", "right")}
+            torso = self._lca(arms["left"]["leaf"], arms["right"]["leaf"])
+            named_torso = self.named(self.path(torso) or [self.root], "torso", "chest")
+            self.guesses.append(f"torso body: {self.bname(torso)} (where the arms branch"
+                                + ("" if not named_torso or named_torso[-1] == torso else f"; named torso: {self.bname(named_torso[-1])}") + ")")
+            kps += self._trunk(torso, arms, legs, leg_bodies)
+            for s in ("left", "right"):
+                kps += arms[s]["kps"]
+        else:
+            arms, torso = {}, self.root
+            self.guesses.append(f"legs-only robot: no arm on the {' or the '.join(s for s in sides if not sides[s])}; "
+                                f"torso body: the root {self.bname(self.root)}; upper-body keypoints left out")
+            named = self.named([b for b in self.subtree(self.root) if b not in leg_bodies], "head")
+            if named:
+                kps.append(self.kp("head", named[-1], weight=0.5, note="head: body named head; its origin"))
         joints, dv, dt, dk = draft_joints(self)
         joints = stiffen_ankles(self, legs, joints)
         nominal = draft_nominal(self, legs, {j.name: j for j in joints})
+        nominal = clear_arms(self, arms, {j.name: j for j in joints}, nominal)
+        nominal = spread_feet(self, legs, {j.name: j for j in joints}, nominal)
         return Draft(
             name=name, model_ref=ref, mjcf=mjcf, menagerie=menagerie, entry=entry,
             root_body=self.bname(self.root), torso_body=self.bname(torso),
@@ -119,7 +132,29 @@ class Skeleton:
         if not cands:
             raise RobotConfigError(f"{self.where}: cannot find a {side} leg (no body below the root on the {side}, y "
                                    f"{'>' if sign > 0 else '<'} 0, at qpos0); is the model a humanoid standing along z with x forward?")
-        return min(cands, key=lambda b: self.d.xpos[b][2])
+        low = min(cands, key=lambda b: self.d.xpos[b][2])
+        foot = low
+        while foot not in (self.root, 0) and not geo.body_geoms(self.m, foot):
+            foot = int(self.m.body_parentid[foot])
+        if foot in (self.root, 0):
+            raise RobotConfigError(f"{self.where}: the {side} foot {self.bname(low)} and the leg above it have no collision "
+                                   "geometry to stand on; add a collision geom (e.g. a box) for the sole to the foot body")
+        if foot != low:
+            self.guesses.append(f"{side} foot: {self.bname(low)} has no collision geometry; its nearest ancestor with some, "
+                                f"{self.bname(foot)}, is the foot")
+        return foot
+
+    def _pelvis(self, legs: dict) -> KeypointDraft:
+        """The pelvis keypoint at the midpoint of the two hip centres, on the root body."""
+        hips = []
+        for s in ("left", "right"):
+            k = legs[s]["kps"][0]
+            b = mujoco.mj_name2id(self.m, mujoco.mjtObj.mjOBJ_BODY, k.body)
+            hips.append(self.d.xpos[b] + self.d.xmat[b].reshape(3, 3) @ np.array(k.offset))
+        mid = (hips[0] + hips[1]) / 2
+        return self.kp("pelvis", self.root, geo.to_body(self.d, self.root, mid),
+                       note=f"midpoint of the hip centres, {1000 * np.linalg.norm(mid - self.d.xpos[self.root]):.0f} mm from "
+                            f"the root body's origin")
 
     def _leg(self, side: str, foot: int, split: int) -> dict:
         """The leg from below ``split`` (where the two legs part) down to ``foot``."""
@@ -146,8 +181,11 @@ class Skeleton:
         ankle_w = self.d.xpos[ankle] + self.d.xmat[ankle].reshape(3, 3) @ ankle_off
         ankle_h = float(geo.to_body(self.d, foot, ankle_w)[2] - cz)
         ball = (cx + 0.5 * hx, cy, cz + 0.4 * max(ankle_h, 0.0))
-        kps = [self.kp(f"{side}_hip", hip, hip_off), self.kp(f"{side}_knee", knee),
-               self.kp(f"{side}_ankle", ankle, ankle_off),
+        jn = lambda bodies: ", ".join(self.jname(j) for j in geo.hinge_axes(self.m, self.d, bodies)[2])  # noqa: E731
+        kps = [self.kp(f"{side}_hip", hip, hip_off, note=f"hip: where the axes of {jn(above)} meet"),
+               self.kp(f"{side}_knee", knee, note=f"knee: origin of {self.bname(knee)} ({how})"),
+               self.kp(f"{side}_ankle", ankle, ankle_off,
+                       note=f"ankle: where the axes of {jn(below)} meet" if below else "CHECK: no ankle joint; the foot body"),
                self.kp(f"{side}_foot", foot, ball, 0.5, "ball of the foot: 3/4 along the sole, 40% of the ankle height up")]
         return {"chain": chain, "foot": foot_draft, "kps": kps, "hip": above, "knee": knee, "ankle": below}
 
@@ -182,22 +220,23 @@ class Skeleton:
             self.checks.append(f"{side} sole: {self.bname(foot)} has no collision geoms; the sole came from visual geoms")
         if not gs:
             raise RobotConfigError(f"{self.where}: foot body {self.bname(foot)} has no geoms; cannot find the sole")
-        centre, half, npts = geo.sole_rectangle(self.m, self.d, foot, gs)
-        zdot = float(self.d.xmat[foot].reshape(3, 3)[2, 2])
-        if zdot < 0.999:
-            self.checks.append(f"{side} foot frame {self.bname(foot)} is tilted at qpos0 (z axis . world z = {zdot:.3f}); the sole rectangle is in its x/y plane")
+        centre, half, npts, frame = geo.sole_rectangle(self.m, self.d, foot, gs)
+        quat = geo.mat_to_quat(frame)
+        tilted = float(np.degrees(np.arccos(np.clip(frame[2, 2], -1, 1))))
+        if tilted > 0.05:
+            self.guesses.append(f"{side} foot frame {self.bname(foot)} is tilted {tilted:.1f} deg from the floor at qpos0: "
+                                "the sole rectangle is laid in the floor plane (sole_quat)")
         if min(half) < 0.005:
             half = np.maximum(half, 0.01)
             note = "CHECK: sole too narrow in the model's geometry; widened to 2 cm"
             self.checks.append(f"{side} sole: the lowest geometry of {self.bname(foot)} is a point or line; sole widened to 2 cm")
         self.guesses.append(f"{side} sole: {self.bname(foot)}, {2 * half[0]:.3f} x {2 * half[1]:.3f} m at z {centre[2]:+.4f} in its frame ({npts} lowest points)")
-        return FootDraft(side, self.bname(foot), rounded(centre), rounded(half), note or f"covers the lowest {npts} points of the foot's collision geometry")
+        return FootDraft(side, self.bname(foot), rounded(centre), rounded(half),
+                         note or f"covers the lowest {npts} points of the foot's collision geometry",
+                         None if np.allclose(quat, [1, 0, 0, 0], atol=1e-6) else rounded(quat, 6))
 
-    def _arm(self, side: str, leaves: list[int]) -> dict:
-        sign = 1.0 if side == "left" else -1.0
-        cands = [b for b in leaves if sign * self.side(b) > 0.03]
-        if not cands:
-            raise RobotConfigError(f"{self.where}: cannot find a {side} arm (no branch ending at y {'>' if sign > 0 else '<'} 0 outside the legs)")
+    def _arm(self, side: str, cands: list[int]) -> dict:
+        """The arm on ``side``: the leaf among ``cands`` (leaves outside the legs on that side) farthest along the tree."""
 
         def length(b: int) -> float:
             p = [self.root] + self.path(b)
@@ -206,32 +245,61 @@ class Skeleton:
         leaf = max(cands, key=length)
         return {"leaf": leaf, "side": side}
 
+    def _cut_hand(self, chain: list[int]) -> tuple[list[int], str]:
+        """The arm chain up to the first body where it branches into several jointed parts (a hand
+        or gripper: its fingers), which is kept; the reason in words."""
+        def jointed(b: int) -> bool:
+            return any(self.has_hinge(x) for x in self.subtree(b))
+        for i, b in enumerate(chain):
+            if sum(1 for c in self.children[b] if jointed(c)) >= 2:
+                return chain[: i + 1], f"; hand/gripper from {self.bname(b)} on (it branches into fingers)"
+        return chain, ""
+
     def _arm_keypoints(self, arm: dict, torso: int) -> list[KeypointDraft]:
         side, leaf = arm["side"], arm["leaf"]
         full = self.path(leaf)
         chain = full[full.index(torso) + 1:] if torso in full else full
-        elbow, how = self._middle(chain, "elbow")
-        self.guesses.append(f"{side} arm: {' > '.join(self.bname(b) for b in chain)}; elbow {self.bname(elbow)} ({how})")
-        k = chain.index(elbow)
-        above = [b for b in chain[:k] if self.has_hinge(b)] or chain[:1]
-        shoulder, sh_off = self.center_of(above, chain[:k] or chain[:1])
-        kps = [self.kp(f"{side}_shoulder", shoulder, sh_off), self.kp(f"{side}_elbow", elbow)]
-        below = chain[k + 1:]
-        wrists = self.named(below, "wrist") or self.named(below, "hand")[:1]
-        hinged = [b for b in (wrists or below) if self.has_hinge(b)]
-        if hinged:
-            body, off = self.center_of(hinged, below)
-            kps.append(self.kp(f"{side}_wrist", body, off))
-            self.guesses.append(f"{side} wrist: where the axes of {', '.join(self.bname(b) for b in hinged)} meet")
-        elif wrists:
-            kps.append(self.kp(f"{side}_wrist", wrists[0]))
-            self.guesses.append(f"{side} wrist: body {self.bname(wrists[0])} (by name)")
-        else:
-            last = chain[-1]
-            off = self._forearm_tip(last)
-            kps.append(self.kp(f"{side}_wrist", last, off, note="CHECK: no wrist joint; put at 90% of the forearm geometry's reach"))
-            self.checks.append(f"{side} wrist: no wrist joint or body; keypoint put at 90% of {self.bname(last)}'s reach {rounded(off, 3)}")
-        return kps
+        chain, hand = self._cut_hand(chain)
+        pts, dirs, jids = geo.hinge_axes(self.m, self.d, chain)
+        groups = group_joints(pts, dirs)
+        if len(groups) < 2:
+            raise RobotConfigError(f"{self.where}: the {side} arm {' > '.join(self.bname(b) for b in chain)} has no elbow "
+                                   "(its hinge axes all meet in one point); map the arm keypoints by hand in the TOML")
+        s, e, w = pick_shoulder_elbow_wrist(groups)
+        sh = [jids[k] for k in groups[s].joints]
+        arm["roll"] = max(sh, key=lambda j: abs(self.d.xaxis[j][0]))  # abducts the arm: axis along x
+        arm["bodies"] = self.subtree(chain[0])
+        names = lambda g: ", ".join(self.jname(jids[k]) for k in groups[g].joints)  # noqa: E731
+
+        def body_of(g: int) -> int:  # the group's body nearest to where its axes meet (ties: the later)
+            bodies = [int(self.m.jnt_bodyid[jids[k]]) for k in groups[g].joints]
+            dist = [float(np.linalg.norm(self.d.xpos[b] - groups[g].centre)) for b in bodies]
+            return [b for b, x in zip(bodies, dist) if x <= min(dist) + 1e-3][-1]
+        self.guesses.append(f"{side} arm: {' > '.join(self.bname(b) for b in chain)}{hand}")
+        out = []
+        for human, g, what in ((f"{side}_shoulder", s, "shoulder"), (f"{side}_elbow", e, "elbow")):
+            b = body_of(g)
+            out.append(self.kp(human, b, geo.to_body(self.d, b, groups[g].centre),
+                               note=f"{what}: where the axes of {names(g)} meet"))
+        if w is not None:
+            b = body_of(w)
+            out.append(self.kp(f"{side}_wrist", b, geo.to_body(self.d, b, groups[w].centre),
+                               note=f"wrist: where the axes of {names(w)} meet (the last arm joints before the hand)"))
+            return out
+        ec = groups[e].centre
+        twist = [k for k in groups[e].joints[1:] if np.linalg.norm(pts[k] - ec) > MEET_TOL]
+        if twist:
+            k = twist[-1]
+            b = int(self.m.jnt_bodyid[jids[k]])
+            out.append(self.kp(f"{side}_wrist", b, geo.to_body(self.d, b, pts[k]),
+                               note=f"wrist: the forearm-twist joint {self.jname(jids[k])} where it carries the hand, "
+                                    f"{1000 * np.linalg.norm(pts[k] - ec):.0f} mm beyond the elbow"))
+            return out
+        last = chain[-1]
+        off = self._forearm_tip(last)
+        out.append(self.kp(f"{side}_wrist", last, off, note="CHECK: no wrist joint; put at 90% of the forearm geometry's reach"))
+        self.checks.append(f"{side} wrist: no wrist joint or body; keypoint put at 90% of {self.bname(last)}'s reach {rounded(off, 3)}")
+        return out
 
     def _forearm_tip(self, body: int) -> np.ndarray:
         gs = geo.body_geoms(self.m, body) or geo.body_geoms(self.m, body, collision_only=False)
@@ -268,7 +336,7 @@ class Skeleton:
         out = [self.kp("spine3", torso, geo.to_body(self.d, torso, spine3), 0.5, "15% of the way from the shoulders down to the hips"),
                self.kp("neck", torso, geo.to_body(self.d, torso, neck), 0.5, "a quarter of the way from the shoulders up to the head"),
                self.kp("head", head_body, geo.to_body(self.d, head_body, head_w), 0.5,
-                       "" if "CHECK" not in how else "CHECK: " + how)]
+                       f"head: {how}" if "CHECK" not in how else "CHECK: " + how.replace(", CHECK", ""))]
         return out
 
     def _head(self, exclude: set) -> tuple[int, np.ndarray, str]:

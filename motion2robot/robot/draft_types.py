@@ -31,6 +31,7 @@ class FootDraft:
     sole_center: tuple[float, float, float]
     sole_half: tuple[float, float]
     note: str = ""
+    sole_quat: tuple[float, float, float, float] | None = None  # sole frame in the body frame; None: the body's
 
 
 @dataclass(frozen=True)

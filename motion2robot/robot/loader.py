@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import re
 from pathlib import Path
 
 import mujoco
@@ -63,7 +64,7 @@ def build_robot(config: RobotConfig, mjcf: str | Path, *, name: str | None = Non
     try:
         spec = mujoco.MjSpec.from_file(str(mjcf))
     except Exception as err:
-        raise RobotConfigError(f"{mjcf}: MuJoCo cannot read this MJCF ({' '.join(str(err).split())}); fix the model file") from err
+        raise mjcf_error(mjcf, err) from err
 
     bodies = {b.name: b for b in spec.bodies if b.name}
     _apply_joint_ranges(spec, config, where)
@@ -87,6 +88,18 @@ def build_robot(config: RobotConfig, mjcf: str | Path, *, name: str | None = Non
     except Exception as err:
         raise RobotConfigError(f"{where}: the model does not compile with this config ({' '.join(str(err).split())})") from err
     return _assemble(config, model, str(mjcf), name or config.name, source, where)
+
+
+def mjcf_error(mjcf: Path, err: Exception) -> RobotConfigError:
+    """One line for an MJCF MuJoCo cannot read: a missing or unreadable mesh/asset file is named
+    with where it was looked for; anything else quotes MuJoCo."""
+    text = " ".join(str(err).split())
+    m = re.search(r"(?:Error opening file|resource not found via provider or OS filesystem:?) '?([^',]+)'?", text)
+    if m:
+        return RobotConfigError(
+            f"{mjcf}: asset file '{m.group(1)}' cannot be read (looked for relative to {mjcf.parent} and the "
+            "MJCF's compiler meshdir/assetdir/texturedir); fix that path in the MJCF or put the file there")
+    return RobotConfigError(f"{mjcf}: MuJoCo cannot read this MJCF ({text}); fix the model file")
 
 
 def _apply_joint_ranges(spec: mujoco.MjSpec, config: RobotConfig, where: str) -> None:

@@ -72,12 +72,14 @@ def menagerie_available(name: str) -> tuple[bool, str]:
 
 def _default_entry(name: str, folder: Path) -> str:
     """The robot entry point of a menagerie folder when the config names none: the registry's
-    ``default_model`` if ``mujoco-menagerie`` knows the robot, else ``NAME.xml``, else the only
-    MJCF that is not a scene."""
+    ``default_model`` if ``mujoco-menagerie`` knows the robot and the folder has it, else
+    ``NAME.xml``, else the only MJCF that is not a scene."""
     try:
         import mujoco_menagerie
 
-        return mujoco_menagerie.get(name).default_model
+        entry = mujoco_menagerie.get(name).default_model
+        if (folder / f"{entry}.xml").is_file():
+            return entry
     except Exception:  # package absent or robot not in its registry
         pass
     if (folder / f"{name}.xml").is_file():

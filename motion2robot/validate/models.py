@@ -50,6 +50,13 @@ def check_model(robot: Robot) -> mujoco.MjModel:
 
 
 @functools.lru_cache(maxsize=8)
+def mujoco_world_model(robot: Robot) -> mujoco.MjModel:
+    """Robot + floor with the MJCF's own collision bitmasks (geom ids as in :func:`check_model`):
+    what MuJoCo itself would test (cached per robot)."""
+    return _compile(_world_spec(robot))
+
+
+@functools.lru_cache(maxsize=8)
 def physics_model(robot: Robot, timestep: float = 0.002) -> mujoco.MjModel:
     """Robot + floor with servo-like position actuators on every hinge, in ``joint_names`` order.
 
@@ -88,18 +95,3 @@ def collidable_bodies(model: mujoco.MjModel) -> np.ndarray:
     active = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
     out[np.unique(model.geom_bodyid[active])] = True
     return out
-
-
-def adjacent_body_pairs(model: mujoco.MjModel) -> set[tuple[int, int]]:
-    """Body pairs (a < b) that are kinematic neighbours for collision purposes: a body and its
-    nearest collidable ancestor, skipping geometry-less intermediate bodies (e.g. the small yaw
-    links of a hip, whose neighbours overlap by design)."""
-    coll = collidable_bodies(model)
-    pairs: set[tuple[int, int]] = set()
-    for b in range(1, model.nbody):
-        p = int(model.body_parentid[b])
-        while p > 0 and not coll[p]:
-            pairs.add((min(b, p), max(b, p)))
-            p = int(model.body_parentid[p])
-        pairs.add((min(b, p), max(b, p)))
-    return pairs

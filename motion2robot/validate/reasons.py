@@ -71,8 +71,14 @@ def _torque(c: dict, fps: float) -> list[str]:
 
 
 def _self_collision(c: dict, fps: float) -> list[str]:
-    out = [f"{human_name(v['body1'])} and {human_name(v['body2'])} collide, {v['depth_m'] * 1000:.0f} mm deep, "
-           f"{_where(v['frames'], fps)}" for v in c.get("violations", [])[:MAX_PER_CHECK]]
+    out = []
+    for v in c.get("violations", [])[:MAX_PER_CHECK]:
+        pair = f"{human_name(v['body1'])} and {human_name(v['body2'])}"
+        if "nominal_depth_m" in v:  # the model itself overlaps there: only the deepening counts
+            out.append(f"{pair} (the model itself overlaps them {v['nominal_depth_m'] * 1000:.0f} mm in its nominal pose) "
+                       f"go {v['depth_m'] * 1000:.0f} mm deeper, {_where(v['frames'], fps)}")
+        else:
+            out.append(f"{pair} collide, {v['depth_m'] * 1000:.0f} mm deep, {_where(v['frames'], fps)}")
     return out + _more(c.get("violations", []), "colliding body pairs")
 
 
