@@ -119,7 +119,7 @@ def test_hostile_trajectories_never_reach_the_wire(tmp_path_factory, q):
     with VirtualChain(CAL.ids.tolist(), baud=1_000_000, positions=start_at(q[0])) as chain:
         rep, _ = run(chain, motion(q, fps=25.0), tmp, max_seconds=0.5)
         assert check_wire(chain) > 0
-    assert rep.stop_reason == "end" and rep.all_torque_off
+    assert rep.stop_reason == "end" and rep.all_torque_off, rep.describe()
 
 
 FAULTS = {

@@ -52,8 +52,8 @@ EXPECTED = {
     "mdm_results/gmd_template_joints.npy": ("mdm_array", 1, 120),
     "mdm_results/mdm_throw_ball_results.npy": ("mdm_results", 30, None),
     "mdm_results/mdm_walk_pickup_results.npy": ("mdm_results", 3, 60),
-    "smpl/amass_dmpl_sample.npz": "needs the licence-restricted SMPL/SMPL-H model files",
-    "smpl/aistpp_gBR_sBM_cAll_d04_mBR0_ch01.pkl": "needs the licence-restricted SMPL/SMPL-H model files",
+    "smpl/amass_dmpl_sample.npz": ("amass", 1, 235),  # approximate skeleton (no --body-model): a warning
+    "smpl/aistpp_gBR_sBM_cAll_d04_mBR0_ch01.pkl": ("aistpp_smpl", 1, 720),
     "cmu_asf_amc/01.asf": "is an ASF skeleton without motion",  # the skeleton; the take is the .amc
     "cmu_asf_amc/01_01.amc": ("asf_amc", 1, 2751),
 }

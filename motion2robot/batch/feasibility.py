@@ -81,6 +81,10 @@ class FeasibilityJob:
         t0 = time.perf_counter()
         # the tempo/legs policy judges its attempts with these check options: its report is reused
         motion, report = retarget_and_check(human, state.robot, state.retarget_options, state.check_options)
+        if human.meta.get("control_path"):  # a requested trajectory: judged again with it in the meta
+            from motion2robot.retarget.control_path import with_control_path
+
+            motion, report = with_control_path(motion, human), None
         t["retarget_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "check"
         t0 = time.perf_counter()
@@ -90,6 +94,9 @@ class FeasibilityJob:
         row.update(feasible=bool(report.feasible),
                    failed_checks=[name for name, c in report.checks.items() if c.get("ok") is False],
                    reasons=list(report.reasons), figures=dict(report.figures))
+        control = {k: v for k, v in report.checks.get("trajectory", {}).items() if k.startswith("control_")}
+        if control:
+            row["control"] = control
         if config.save_motions:
             stage[0] = "save"
             out = Path(config.save_motions) / motion_file_name(item)

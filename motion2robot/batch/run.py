@@ -35,13 +35,14 @@ class BatchPlan:
 
 def plan_batch(inputs: Sequence[str | Path], out: str | Path, *, redo: bool = False,
                redo_errors: bool = False, read_options: Mapping[str, Any] | None = None,
-               robot: str | None = None) -> BatchPlan:
+               robot: str | None = None, expansion: Expansion | None = None) -> BatchPlan:
     """Work out what to do. ``redo`` drops the existing rows of these clips (other rows in the
     file are kept); ``redo_errors`` drops only the rows that have an error. With ``robot``, a
     file whose rows for these clips were made for another robot is refused (resume would
-    otherwise keep the other robot's verdicts)."""
+    otherwise keep the other robot's verdicts). ``expansion``: the work items, when the caller
+    expanded the INPUTS itself (edit pairs)."""
     out = Path(out)
-    expansion = expand_inputs(inputs, read_options)
+    expansion = expansion or expand_inputs(inputs, read_options)
     keys = {i.key for i in expansion.items}
     existing = read_rows(out)
     dropped = 0

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
+import numpy as np
+
 _NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?", re.IGNORECASE)
 _PARENS = re.compile(r"\s*\([^()]*(?:\([^()]*\)[^()]*)*\)")  # "(frames 3-7, ... (5 runs))"
 _FRAMES = re.compile(r",?\s*\bin frames?\b[\s#\-,.]*")
@@ -48,6 +50,10 @@ class Summary:
     error_kinds: tuple[tuple[str, int, str], ...]
     slowest: tuple[tuple[str, float, int | None], ...]
     time_s: dict[str, float]
+    #: clips with a requested trajectory and the mean of their root errors (robot and human metres).
+    control: dict[str, float] | None = None
+    #: edit pairs: how many, executable source, executable edit, edits that break / fix a source.
+    edits: dict[str, int] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -57,7 +63,7 @@ class Summary:
             "reasons": [{"pattern": p, "clips": n, "example": e} for p, n, e in self.reasons],
             "errors_by_kind": [{"pattern": p, "clips": n, "example": e} for p, n, e in self.error_kinds],
             "slowest": [{"key": k, "total_s": t, "frames": f} for k, t, f in self.slowest],
-            "time_s": self.time_s,
+            "time_s": self.time_s, "control": self.control, "edits": self.edits,
         }
 
 
@@ -94,8 +100,28 @@ def summarize(rows: Sequence[dict[str, Any]], top: int = 10) -> Summary:
         failed_checks=tuple(sorted(checks.items(), key=lambda kv: (-kv[1], kv[0]))),
         reasons=reasons, error_kinds=error_kinds,
         slowest=tuple((r["key"], float(r["timings"]["total_s"]), r.get("frames")) for r in slowest),
-        time_s=time_s,
+        time_s=time_s, control=_control(rows), edits=_edits(rows),
     )
+
+
+def _edits(rows: Sequence[dict[str, Any]]) -> dict[str, int] | None:
+    e = [(r.get("feasible") is True, r["edit"].get("source_feasible") is True) for r in rows
+         if not r.get("error") and isinstance(r.get("edit"), dict)]
+    if not e:
+        return None
+    return {"pairs": len(e), "source_executable": sum(s for _, s in e), "edit_executable": sum(f for f, _ in e),
+            "both_executable": sum(f and s for f, s in e), "edit_breaks": sum(s and not f for f, s in e),
+            "edit_fixes": sum(f and not s for f, s in e)}
+
+
+def _control(rows: Sequence[dict[str, Any]]) -> dict[str, float] | None:
+    c = [r["control"] for r in rows if not r.get("error") and isinstance(r.get("control"), dict)
+         and r["control"].get("control_mean_error_m") is not None]
+    if not c:
+        return None
+    return {"clips": len(c), "mean_error_m": round(float(np.mean([x["control_mean_error_m"] for x in c])), 4),
+            "mean_error_human_m": round(float(np.mean([x["control_mean_error_human_m"] for x in c])), 4),
+            "max_error_m": round(float(max(x["control_max_error_m"] for x in c)), 4)}
 
 
 def percent(x: float | None) -> str:
@@ -113,6 +139,16 @@ def format_summary(s: Summary, robot: str | None = None) -> str:
         f"  CPU time: read {s.time_s['read']:.1f} s, retarget {s.time_s['retarget']:.1f} s, "
         f"check {s.time_s['check']:.1f} s",
     ]
+    if s.edits:
+        e = s.edits
+        lines.append(f"  edit pairs: {e['pairs']}; the edit stays executable in {e['both_executable']} of "
+                     f"{e['source_executable']} pairs whose source is executable "
+                     f"({percent(e['both_executable'] / e['source_executable']) if e['source_executable'] else 'n/a'}); "
+                     f"breaks {e['edit_breaks']}, fixes {e['edit_fixes']}")
+    if s.control:
+        lines.append(f"  requested trajectories ({s.control['clips']} clips): root error mean "
+                     f"{s.control['mean_error_m'] * 100:.1f} cm on the robot ({s.control['mean_error_human_m'] * 100:.1f} cm "
+                     f"at human scale), max {s.control['max_error_m'] * 100:.1f} cm")
     if s.failed_checks:
         lines.append("failing checks (clips):")
         lines += [f"  {name:<18} {n:>6}  ({percent(n / s.clips)})" for name, n in s.failed_checks]

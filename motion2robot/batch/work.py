@@ -2,7 +2,9 @@
 
 An INPUT is
 - a motion file (any extension; named explicitly, it is always tried);
-- a folder: every file below it (recursively, sorted) whose extension is in :data:`MOTION_EXTENSIONS`.
+- a folder: every file below it (recursively, sorted) whose extension is in :data:`MOTION_EXTENSIONS`;
+  a generator's extra copies of one motion (MoMask's joints/_ik/BVH quartet) are skipped, see
+  :mod:`~motion2robot.batch.layouts`.
   ``.npy`` files holding a 1-D array (a data set's ``Mean.npy`` / ``Std.npy`` feature statistics)
   are not motions and are *skipped* (listed in :attr:`Expansion.skipped`), not turned into error rows;
 - a manifest (``.txt`` / ``.lst``): one path per line, relative to the manifest's folder; blank lines
@@ -25,17 +27,19 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 from numpy.lib import format as npformat
 
+from motion2robot.batch.layouts import duplicate_outputs
 from motion2robot.errors import UserError
+from motion2robot.motion.formats import SCAN_SUFFIXES, SINGLE_CLIP_SUFFIXES
 from motion2robot.util.files import special_file
 
-#: Extensions picked up when a folder is expanded.
-MOTION_EXTENSIONS = (".npy", ".npz", ".bvh", ".pt", ".pth", ".pkl", ".amc")
+#: Extensions picked up when a folder is expanded (the format table's).
+MOTION_EXTENSIONS = SCAN_SUFFIXES
 #: Extensions read as manifests (one path per line).
 MANIFEST_EXTENSIONS = (".txt", ".lst")
-#: Formats that hold exactly one clip per file.
-_SINGLE_CLIP = (".bvh", ".pkl", ".amc")
-#: Last axis sizes of HumanML3D / KIT feature vectors.
-_FEATURE_DIMS = (263, 251)
+#: Extensions whose every format holds exactly one clip per file.
+_SINGLE_CLIP = SINGLE_CLIP_SUFFIXES
+#: Last axis sizes of per-frame feature vectors (HumanML3D, KIT, MotionFix 207-d, SMPL-H 135).
+_FEATURE_DIMS = (263, 251, 207, 135)
 
 
 @dataclass(frozen=True)
@@ -80,6 +84,8 @@ def _npy_header(path: Path) -> tuple[tuple[int, ...], np.dtype]:
 def _count_array(shape: tuple[int, ...]) -> int:
     """Clips in a plain array: (N, T, 22, 3) / (N, 22, 3, T) / (N, 263, 1, T) batches have N,
     (N, T, 263) feature batches have N, everything else one."""
+    if len(shape) == 5:  # MLD "all in one": samples x repetitions
+        return int(shape[0]) * int(shape[1])
     if len(shape) == 4:
         return int(shape[0])
     if len(shape) == 3 and shape[-1] in _FEATURE_DIMS:
@@ -103,10 +109,20 @@ def count_clips(path: Path, read_options: Mapping[str, Any] | None = None) -> in
                 obj = obj.item()
             if isinstance(obj, dict) and isinstance(obj.get("motion"), np.ndarray):
                 return int(obj["motion"].shape[0]) if obj["motion"].ndim == 4 else 1
+            if isinstance(obj, dict) and "pose" in obj:  # an editor's result: edited, source, target
+                return sum(k in obj for k in ("pose", "pose_source", "pose_target"))
             return 1  # let the reader explain what is wrong with it
         if len(shape) <= 1:
             return None
         return _count_array(shape)
+    if ext == ".pkl":
+        from motion2robot.motion.safe_pickle import restricted_load
+
+        with open(path, "rb") as fh:
+            obj = restricted_load(path, fh)
+        if isinstance(obj, dict) and "pose" in obj:  # an editor's result: edited, source, target
+            return sum(k in obj for k in ("pose", "pose_source", "pose_target"))
+        return 1
     if ext == ".npz":
         with np.load(path, allow_pickle=False) as z:
             key = next((k for k in ("joints", "positions") if k in z.files), None)
@@ -130,15 +146,18 @@ def _read_manifest(path: Path) -> list[Path]:
     return out
 
 
-def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> Iterable[tuple[Path, bool]]:
-    """Yield (file, named_explicitly) in order."""
+def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]
+          ) -> Iterable[tuple[Path, bool, str | None]]:
+    """Yield (file, named_explicitly, why it is skipped or None) in order."""
     for p in inputs:
         if p.is_dir() and p.suffix.lower() not in MOTION_EXTENSIONS:
             # regular files, and anything else named like a motion (FIFO, device, broken link,
             # a directory x.npy): those become error rows instead of vanishing
-            for f in sorted(q for q in p.rglob("*") if q.suffix.lower() in MOTION_EXTENSIONS
-                            and (q.is_file() or special_file(q) is not None)):
-                yield f, False
+            found = sorted(q for q in p.rglob("*") if q.suffix.lower() in MOTION_EXTENSIONS
+                           and (q.is_file() or special_file(q) is not None))
+            copies = duplicate_outputs(q for q in found if q.is_file())
+            for f in found:
+                yield f, False, copies.get(f)
         elif p.suffix.lower() in MANIFEST_EXTENSIONS:
             if not p.is_file():
                 raise UserError(f"{p}: manifest not found; check the path")
@@ -147,7 +166,7 @@ def _walk(inputs: Iterable[Path], explicit: bool, seen_manifests: set[Path]) -> 
                 raise UserError(f"{p}: manifest lists itself (directly or through another); remove the loop")
             yield from _walk(_read_manifest(p), True, seen_manifests | {real})
         else:
-            yield p, explicit
+            yield p, explicit, None
 
 
 def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] | None = None) -> Expansion:
@@ -166,11 +185,14 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
     skipped: list[tuple[str, str]] = []
     errors: dict[str, str] = {}
     seen: set[str] = set()
-    for f, explicit in _walk([Path(p).expanduser() for p in inputs], True, set()):
+    for f, explicit, why in _walk([Path(p).expanduser() for p in inputs], True, set()):
         path = str(f.resolve())
         if path in seen:
             continue
         seen.add(path)
+        if why is not None:
+            skipped.append((path, why))
+            continue
         try:
             special = special_file(f)
             if special is not None:

@@ -33,6 +33,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--redo-errors", action="store_true", help="process again the clips whose row is an error")
     p.add_argument("--max-tasks-per-child", type=int, metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
+    p.add_argument("--pairs", action="store_true",
+                   help="INPUTS are edit pairs (editor result files, folders of them, or manifests of SOURCE<TAB>EDIT "
+                        "lines): each edit is retargeted keeping what it did not change (see 'edit'); the summary "
+                        "gives the share of edits that stay executable")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     from motion2robot.cli.check_options import add_check_options
     from motion2robot.cli.read_options import add_read_options
@@ -73,14 +77,23 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
     from motion2robot.cli.check_options import check_option_kwargs
 
+    expansion = None
+    if args.pairs:
+        from motion2robot.batch.pairs import expand_pairs
+
+        expansion = expand_pairs(args.inputs)
     plan = plan_batch(args.inputs, args.out, redo=args.redo, redo_errors=args.redo_errors,
-                      read_options=read_options, robot=robot.name)
+                      read_options=read_options, robot=robot.name, expansion=expansion)
     exp = plan.expansion
     files = len({i.path for i in exp.items})
     note = [f"{len(exp.items)} clips in {files} files"]
-    if exp.skipped:
-        names = ", ".join(os.path.basename(p) for p, _ in exp.skipped[:4])
-        note.append(f"{len(exp.skipped)} non-motion files skipped ({names})")
+    copies = [p for p, why in exp.skipped if why.startswith("MoMask copy")]
+    other = [p for p, why in exp.skipped if not why.startswith("MoMask copy")]
+    if copies:
+        note.append(f"{len(copies)} MoMask copies of the same samples skipped (joints/*_ik.npy kept)")
+    if other:
+        names = ", ".join(os.path.basename(p) for p in other[:4])
+        note.append(f"{len(other)} non-motion files skipped ({names})")
     if plan.done:
         note.append(f"{plan.done} already in {args.out} (resume; --redo to redo)")
     if plan.dropped:
@@ -93,7 +106,8 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
         retarget += (("tempo_cap", args.tempo_cap),)
     config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
                          read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
-                         check_options=tuple(sorted(check_option_kwargs(args).items())))
+                         check_options=tuple(sorted(check_option_kwargs(args).items())),
+                         job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:

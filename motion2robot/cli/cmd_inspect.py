@@ -15,7 +15,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Read a motion file (or folder) as the pipeline does and describe each clip: "
                     "detected format, frames, fps, duration, subject height, up-axis decision, "
                     "foot contacts and text prompt.")
-    p.add_argument("file", help="motion file or folder (.npy, .npz, .bvh, .pt, MDM results.npy)")
+    from motion2robot.motion.formats import SCAN_SUFFIXES
+
+    p.add_argument("file", help=f"motion file or folder ({' '.join(SCAN_SUFFIXES)}; see --format)")
     p.add_argument("--clip", type=int, help="only this clip index")
     p.add_argument("--plot", metavar="OUT.png", help="draw the skeleton at a few frames and the root path")
     add_read_options(p)
@@ -39,10 +41,15 @@ def describe(m, index: int, total: int) -> str:
         f"  units       {meta.get('units')} ({meta.get('units_source')})",
         f"  contacts    left {left:.0f} %, right {right:.0f} % of frames ({mc.meta['contacts_source']})",
     ]
-    for key, label in (("skeleton", "skeleton"), ("features", "features"), ("dropped", "dropped"),
-                       ("note", "note")):
+    for key, label in (("skeleton", "skeleton"), ("joint_map", "mapping"), ("features", "features"),
+                       ("dropped", "dropped"), ("note", "note")):
         if meta.get(key) is not None:
             lines.append(f"  {label:<11} {meta[key]}")
+    if meta.get("control_path"):
+        n = sum(p is not None for p in meta["control_path"])
+        lines.append(f"  control     requested root path in {n} of {m.num_frames} frames ({meta.get('control_source')})")
+    elif meta.get("control_note"):
+        lines.append(f"  control     {meta['control_note']}")
     if meta.get("prompt"):
         lines.append(f"  prompt      \"{meta['prompt']}\"")
     return "\n".join(lines)

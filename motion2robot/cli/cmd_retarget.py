@@ -94,9 +94,11 @@ def run(args: argparse.Namespace) -> int:
     if len(items) > 1:
         from tqdm import tqdm
         items, say = tqdm(items, desc="retarget", unit="clip"), tqdm.write  # lines above the bar
+    from motion2robot.retarget.control_path import with_control_path
+
     status = 0
     for i, human in items:
-        motion = retarget(human, robot, options)
+        motion = with_control_path(retarget(human, robot, options), human)
         label = str(human.meta.get("clip", i))
         path = out if len(clips) == 1 else out.with_name(f"{out.stem}_clip{label}{out.suffix or '.npz'}")
         motion.save(path)

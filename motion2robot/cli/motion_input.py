@@ -51,6 +51,7 @@ def load_motion_input(path: str | Path, args: argparse.Namespace):
     if len(clips) > 1:
         raise UserError(f"{path}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1}")
     from motion2robot.cli.retarget_options import retarget_options_from
+    from motion2robot.retarget.control_path import with_control_path
 
     robot = load_robot(args.robot or "op3")
-    return retarget(clips[0], robot, retarget_options_from(args)), robot, clips[0]
+    return with_control_path(retarget(clips[0], robot, retarget_options_from(args)), clips[0]), robot, clips[0]

@@ -114,16 +114,28 @@ def canonical_positions(positions: np.ndarray) -> np.ndarray:
     return _canonical_positions_inplace(positions.copy())
 
 
-def _canonical_positions_inplace(p: np.ndarray) -> np.ndarray:
-    """:func:`canonical_positions` overwriting ``p`` (a float array the caller owns)."""
+def _canonical_positions_inplace(p: np.ndarray, steps: dict | None = None) -> np.ndarray:
+    """:func:`canonical_positions` overwriting ``p`` (a float array the caller owns); ``steps``
+    (optional) receives the floor height, the yaw turned and the pelvis offset removed."""
     # One strided column at a time: numpy runs a single long inner loop per column instead of one
     # short loop per point for a (T, 22, 2) slice (same values).
-    p[..., 2] -= floor_offset(p)
-    p = _rotate(p, rot_z(-heading_yaw(p)))
+    floor = floor_offset(p)
+    p[..., 2] -= floor
+    yaw = heading_yaw(p)
+    p = _rotate(p, rot_z(-yaw))
     px, py = p[0, KP["pelvis"], :2]
     p[..., 0] -= px
     p[..., 1] -= py
+    if steps is not None:
+        steps.update(floor=float(floor), yaw=float(yaw), origin=(float(px), float(py)))
     return p
+
+
+def to_canonical(transform: Mapping[str, Any], points: np.ndarray) -> np.ndarray:
+    """Points (..., 3) in a file's own axes and units -> the canonical frame of a clip read from it,
+    with the clip's ``meta["canonical_transform"]`` (p_canonical = matrix @ p + offset)."""
+    a = np.asarray(transform["matrix"], dtype=np.float64)
+    return np.asarray(points, dtype=np.float64) @ a.T + np.asarray(transform["offset"], dtype=np.float64)
 
 
 def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str | None,
@@ -160,8 +172,12 @@ def canonicalize(path: str | Path, positions: np.ndarray, fps: float, *, up: str
         raise fail(path, f"the subject is {height:.3g} m tall when read as {units} "
                          f"(expected {lo}-{hi} m; units?)",
                    "pass the right --units (m, cm, mm, inch, cmu) or --up if the skeleton lies on its side")
-    pos = _canonical_positions_inplace(pos)  # pos is our own array (made by _rotate)
+    steps: dict = {}
+    pos = _canonical_positions_inplace(pos, steps)  # pos is our own array (made by _rotate)
     warn_implausible(path, pos, fps)
+    matrix = rot_z(-steps["yaw"]) @ up_rotation(up) * UNIT_SCALE[units]
+    offset = [-steps["origin"][0], -steps["origin"][1], -steps["floor"]]
     info = {"up_axis": up, "up_axis_source": up_source, "units": units, "units_source": units_source,
-            "source_fps": float(source_fps or fps)}
+            "source_fps": float(source_fps or fps),
+            "canonical_transform": {"matrix": matrix.tolist(), "offset": offset}}
     return HumanMotion(pos, fps, contacts=contacts, meta={**(meta or {}), **info})

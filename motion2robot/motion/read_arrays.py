@@ -17,6 +17,7 @@ from motion2robot.motion.canonical import canonicalize
 from motion2robot.motion.checks import check_fps, check_frames, fail
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
+from motion2robot.motion.prompts import prompts_beside
 from motion2robot.motion.safe_pickle import load_npy
 
 HUMANML3D_FPS = 20.0
@@ -48,13 +49,19 @@ def _canon(path: Path, pos: np.ndarray, fps: float, opts: ReadOptions, fmt: str,
 
 
 def _joints_clips(path: Path, arr: np.ndarray) -> list[np.ndarray]:
-    """(T, J, 3) or (N, T, J, 3) with J in 22/24/52 -> list of (T, 22, 3)."""
+    """(T, J, 3), (N, T, J, 3) (MotionGPT / T2M-GPT write N = 1) or MLD's "all in one"
+    (samples, repetitions, T, J, 3), J in 22/24/52 -> list of (T, 22, 3), sample-major."""
     if arr.ndim == 3 and arr.shape[1] in _SMPL_SUPERSETS and arr.shape[2] == 3:
         return [arr[:, :22]]
-    if arr.ndim == 4 and arr.shape[2] in _SMPL_SUPERSETS and arr.shape[3] == 3:
-        return [a[:, :22] for a in arr]
+    if arr.ndim in (4, 5) and arr.shape[-2] in _SMPL_SUPERSETS and arr.shape[-1] == 3:
+        return [a[:, :22] for a in arr.reshape(-1, *arr.shape[-3:])]
     raise fail(path, f"has shape {arr.shape}, not HumanML3D joints (T, 22, 3) or a batch (N, T, 22, 3)",
                "give 22 SMPL joints per frame, or pass --format")
+
+
+def _batch_meta(arr: np.ndarray, i: int) -> dict[str, int]:
+    """Sample and repetition of clip i of an (S, R, T, J, 3) array ({} for other layouts)."""
+    return {"sample": i // arr.shape[1], "repetition": i % arr.shape[1]} if arr.ndim == 5 else {}
 
 
 def read_joints(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMotion]:
@@ -62,7 +69,10 @@ def read_joints(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMot
     (24 / 52 joints) keep their first 22 joints."""
     clips = _joints_clips(path, arr)
     note = {} if arr.shape[-2] == 22 else {"note": f"kept the first 22 of {arr.shape[-2]} joints"}
-    return [_canon(path, c, HUMANML3D_FPS, opts, "humanml3d_joints", i, **note)
+    prompts = prompts_beside(path, arr.shape[0] if arr.ndim == 5 else len(clips))
+    per = len(clips) // len(prompts)
+    return [_canon(path, c, HUMANML3D_FPS, opts, "humanml3d_joints", i, prompt=prompts[i // per],
+                   **_batch_meta(arr, i), **note)
             for i, c in _pick(clips, opts.clip, path)]
 
 
@@ -119,11 +129,12 @@ def read_features(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanM
         check_frames(path, f, "features")
     feat, assumed = denormalise(path, feat, opts)
     clips = [feat] if feat.ndim == 2 else list(feat)
+    prompts = prompts_beside(path, len(clips))
     out = []
     for i, f in _pick(clips, opts.clip, path):
         out.append(_canon(path, F.decode_positions(f), HUMANML3D_FPS, opts, "humanml3d_vecs", i,
                           contacts=F.decode_contacts(f), contacts_source="263-d contact channels",
-                          features=assumed))
+                          features=assumed, prompt=prompts[i]))
     return out
 
 
@@ -177,11 +188,18 @@ def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotio
     if too_long.size:
         raise fail(path, f"lengths exceed the motion array ({t} frames): samples {too_long.tolist()[:8]} "
                          f"claim {lengths[too_long].tolist()[:8]}", "re-save the results (lengths <= T)")
+    hint = obj.get("hint")
+    hint = hint if isinstance(hint, np.ndarray) and hint.ndim == 4 and len(hint) == n else None
     out = []
     for i, c in _pick(list(clips), opts.clip, path):
         prompt = text[i]
-        out.append(_canon(path, c[: lengths[i]], HUMANML3D_FPS, opts, "mdm_results", i,
-                          prompt=str(prompt) if prompt is not None else None))
+        m = _canon(path, c[: lengths[i]], HUMANML3D_FPS, opts, "mdm_results", i,
+                   prompt=str(prompt) if prompt is not None else None)
+        if hint is not None:  # OmniControl: the spatial control signal
+            from motion2robot.motion.control import from_hint
+
+            m = from_hint(m, hint[i])
+        out.append(m)
     return out
 
 

@@ -97,7 +97,8 @@ def _units(skeleton_length_unit: float | None, opts: ReadOptions, asf: Path) -> 
 
 
 def read_asf_amc(path: Path, opts: ReadOptions, skeleton: str | Path | None = None) -> list[HumanMotion]:
-    """One clip per AMC take; ``skeleton``: the .asf (default: found beside the .amc)."""
+    """One clip per AMC take; ``skeleton``: the .asf (default: ``opts.skeleton``, else found beside the .amc)."""
+    skeleton = skeleton if skeleton is not None else opts.skeleton
     if path.suffix.lower() == ".asf" and skeleton is None:
         _refuse_lone_asf(path)
     if opts.clip not in (None, 0, -1):

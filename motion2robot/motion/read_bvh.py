@@ -16,7 +16,7 @@ from motion2robot.motion.canonical import canonicalize
 from motion2robot.motion.checks import fail
 from motion2robot.motion.human import SMPL22, HumanMotion
 from motion2robot.motion.options import ReadOptions
-from motion2robot.motion.skeletons import choose_map, load_name_map
+from motion2robot.motion.skeletons import choose_map, describe_map, load_name_map
 
 
 def _user_map(opts: ReadOptions) -> Mapping[str, str] | None:
@@ -54,7 +54,10 @@ def read_bvh(path: Path, opts: ReadOptions) -> list[HumanMotion]:
         raise fail(path, f"holds one clip, --clip {opts.clip} is out of range", "pass --clip 0 or omit it")
     clip = parse_bvh(path, strict=bool(getattr(opts, "strict", False)))
     names = list(clip.skeleton.names)
-    preset, mapping = choose_map(path, names, _user_map(opts))
+    sk = clip.skeleton
+    children = {p for p in sk.parents if p >= 0}
+    ends = [not sk.channels[j] and j not in children and j > 0 for j in range(len(names))]
+    preset, mapping = choose_map(path, names, _user_map(opts), (sk.parents, sk.offsets, ends))
     joints = forward_kinematics(clip, {n for parts in mapping.values() for n in parts})
     pos = keypoint_positions(joints, mapping)
     extra = {}
@@ -66,5 +69,6 @@ def read_bvh(path: Path, opts: ReadOptions) -> list[HumanMotion]:
         path, pos, fps, up=opts.up, up_source="--up", units=opts.units, units_source="--units",
         source_fps=_snap_fps(clip.frame_time),
         meta={"source": str(path), "format": "bvh", "clip": 0, "skeleton": preset,
+              "joint_map": describe_map(mapping),
               "bvh_joints": len([n for n in names if not n.endswith("_End")]),
               "frame_time": clip.frame_time, **extra})]

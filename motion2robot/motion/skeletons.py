@@ -138,9 +138,11 @@ def load_name_map(path: str | Path) -> dict[str, str]:
     return out
 
 
-def choose_map(path: str | Path, joint_names: list[str], user_map: Mapping[str, str] | None = None
-               ) -> tuple[str, dict[str, list[str]]]:
-    """The preset (or "user", which may override a preset partly) mapping all 22 keypoints.
+def choose_map(path: str | Path, joint_names: list[str], user_map: Mapping[str, str] | None = None,
+               tree: "SkeletonTree | None" = None) -> tuple[str, dict[str, list[str]]]:
+    """The preset, "auto" (names read as tokens and checked against ``tree``, see
+    :mod:`~motion2robot.motion.auto_map`) or "user" map (a user map may override a preset or the
+    automatic map partly) that maps all 22 keypoints.
 
     Raises an InputFileError naming the keypoints the closest skeleton could not map.
     """
@@ -154,8 +156,29 @@ def choose_map(path: str | Path, joint_names: list[str], user_map: Mapping[str, 
             return name, got
         if best is None or len(missing) < len(best[1]):
             best = (name, missing)
+    if tree is not None:
+        from motion2robot.motion.auto_map import auto_map
+
+        got, missing = auto_map(joint_names, *tree)
+        if user_map:
+            mine, _ = resolve(dict(user_map), joint_names)
+            got.update({kp: v for kp, v in mine.items() if kp in user_map})
+            missing = [kp for kp in SMPL22 if kp not in got]
+        if not missing:
+            return ("user+auto" if user_map else "auto"), got
+        if best is None or len(missing) < len(best[1]):
+            best = ("automatic map from joint names", missing)
     assert best is not None
     shown = ", ".join(joint_names[:12]) + (" ..." if len(joint_names) > 12 else "")
     raise fail(path, f"unknown skeleton: closest known map ({best[0]}) cannot map {len(best[1])} keypoints "
                      f"({', '.join(best[1][:8])}{' ...' if len(best[1]) > 8 else ''}); file joints: {shown}",
                "pass --name-map map.toml with a [keypoints] table (e.g. pelvis = \"Hips\")")
+
+
+#: (parents, offsets (J, 3), end-site flags) of a skeleton, in joint-name order.
+SkeletonTree = tuple
+
+
+def describe_map(mapping: Mapping[str, list[str]]) -> str:
+    """One line: ``pelvis=Hips left_hip=LeftUpLeg ... spine3=Spine1+Neck1``."""
+    return " ".join(f"{kp}={'+'.join(mapping[kp])}" for kp in SMPL22 if kp in mapping)

@@ -12,7 +12,7 @@ from motion2robot.motion.checks import fail
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 
-LAYOUTS = ("humanml3d_joints", "humanml3d_vecs")
+LAYOUTS = ("humanml3d_joints", "humanml3d_vecs", "motionfix_207")
 _TORCH_HINT = "pip install motion2robot[torch]"
 
 
@@ -31,7 +31,9 @@ def from_tensor(t: Any, layout: str = "humanml3d_joints", *, fps: float | None =
                 mean: Any = None, std: Any = None, name: str = "<tensor>") -> list[HumanMotion]:
     """Tensor -> canonical clips. layout "humanml3d_joints": (T, 22, 3), (N, T, 22, 3) or MDM's
     (N, 22, 3, T); "humanml3d_vecs": (T, 263) or (N, T, 263), raw or normalised with mean/std
-    (arrays or tensors of 263 values)."""
+    (arrays or tensors of 263 values); "motionfix_207": (T, 207) or (N, T, 207) MotionFix/OmniME
+    features, z up, 30 fps, raw or normalised with mean/std (207 values each) or ``mean`` set to the
+    model's statistics dict."""
     from motion2robot.motion import read_arrays as R
 
     arr = to_numpy(t)
@@ -46,6 +48,15 @@ def from_tensor(t: Any, layout: str = "humanml3d_joints", *, fps: float | None =
             m, s = to_numpy(mean).astype(np.float64), to_numpy(std).astype(np.float64)
             arr = arr * s + m
         return R.read_features(path, arr, opts)
+    if layout == "motionfix_207":
+        from motion2robot.motion.motionfix import features_to_clips, stats_arrays
+
+        stats = None
+        if isinstance(mean, dict):
+            stats = stats_arrays(path, mean)
+        elif mean is not None and std is not None:
+            stats = stats_arrays(path, {"mean": to_numpy(mean), "std": to_numpy(std)})
+        return features_to_clips(path, arr, opts, stats, "the given mean/std")
     raise InputFileError(f"{name}: unknown layout {layout!r}; use one of {', '.join(LAYOUTS)}")
 
 

@@ -142,12 +142,17 @@ def _rollout(c: dict) -> list[str]:
 
 
 def trajectory_sentence(c: dict) -> list[str]:
+    out = []
+    if c.get("control_mean_error_m") is not None:
+        out.append(f"the root follows the requested trajectory ({c.get('control_source')}) within "
+                   f"{c['control_mean_error_m'] * 100:.0f} cm on average (max {c['control_max_error_m'] * 100:.0f} cm; "
+                   f"{c['control_mean_error_human_m'] * 100:.0f} cm at human scale)")
     if c.get("skipped") or c.get("mean_error_m") is None:
-        return []
+        return out
     s = f"the root path follows the human's within {c['mean_error_m'] * 100:.0f} cm on average (max {c['max_error_m'] * 100:.0f} cm)"
     if c.get("heading_error_mean_deg") is not None:
         s += f", heading off by {c['heading_error_mean_deg']:.0f} deg on average"
-    return [s]
+    return [s] + out
 
 
 def reasons(checks: dict[str, dict], fps: float) -> list[str]:

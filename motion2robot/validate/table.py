@@ -36,7 +36,10 @@ def _figure(name: str, c: dict) -> str:
         s = f"fell at {g('fall_time_s'):.2f} s ({g('fall_cause')})" if g("fell") else "stayed up"
         return s + f", tracking RMS {g('tracking_rms_mean_rad', 0):.3f} rad, {g('realtime_factor', 0):.0f}x real time"
     if name == "trajectory":
-        return f"root path error mean {g('mean_error_m', 0) * 100:.1f} cm, max {g('max_error_m', 0) * 100:.1f} cm"
+        s = f"root path error mean {g('mean_error_m', 0) * 100:.1f} cm, max {g('max_error_m', 0) * 100:.1f} cm"
+        if g("control_mean_error_m") is not None:
+            s += f"; requested path {g('control_mean_error_m') * 100:.1f} cm (max {g('control_max_error_m') * 100:.1f})"
+        return s
     return ""
 
 

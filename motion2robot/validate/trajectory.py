@@ -39,12 +39,31 @@ def _direction(xy: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
     return np.arctan2(d[:, 1], d[:, 0]), np.linalg.norm(d, axis=1)
 
 
+def control_error(ctx: Context) -> dict:
+    """Robot root vs the requested trajectory (``meta["control_xy"]``, robot metres, None where a
+    frame is not controlled): mean / max in robot metres and, divided by ``control_scale``, in
+    human metres; {} when the motion carries no control path."""
+    raw, scale = ctx.motion.meta.get("control_xy"), ctx.motion.meta.get("control_scale")
+    if not raw or len(raw) != ctx.kin.num_frames or not scale:
+        return {}
+    on = np.array([p is not None for p in raw])
+    if not on.any():
+        return {}
+    target = np.array([p for p in raw if p is not None], dtype=np.float64)
+    err = np.linalg.norm(ctx.kin.qpos[on, :2] - target, axis=1)
+    return {"control_frames": int(on.sum()), "control_source": ctx.motion.meta.get("control_source"),
+            "control_mean_error_m": round(float(err.mean()), 4), "control_max_error_m": round(float(err.max()), 4),
+            "control_mean_error_human_m": round(float(err.mean()) / float(scale), 4),
+            "control_max_error_human_m": round(float(err.max()) / float(scale), 4)}
+
+
 def trajectory(ctx: Context, sim_root_xy: np.ndarray | None = None) -> dict:
-    """Root path figures against the human's scaled root path (``ok`` is always True)."""
+    """Root path figures against the human's scaled root path, and against the requested
+    trajectory when the motion carries one (``ok`` is always True)."""
     human = human_root_xy(ctx)
     if human is None:
         return {"ok": True, "skipped": "no human root path in the meta",
-                "frames": []}
+                "frames": [], **control_error(ctx)}
     robot = ctx.kin.qpos[:, :2]
     err = np.linalg.norm(robot - human, axis=1)
     w = max(1, round(HEADING_WINDOW * ctx.fps))
@@ -61,6 +80,7 @@ def trajectory(ctx: Context, sim_root_xy: np.ndarray | None = None) -> dict:
         "heading_error_mean_deg": round(float(dhead.mean()), 2) if dhead.size else None,
         "heading_error_max_deg": round(float(dhead.max()), 2) if dhead.size else None,
         "human_path_m": round(lh, 3), "path_length_ratio": round(length(robot) / lh, 3) if lh > 1e-6 else None,
+        **control_error(ctx),
     }
     if sim_root_xy is not None:
         ok = ~np.isnan(sim_root_xy).any(axis=1)

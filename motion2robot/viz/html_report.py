@@ -170,8 +170,9 @@ def _list(items: Sequence[str]) -> str:
 
 
 def render_html(report: Any, motion: RobotMotion, robot: Robot, *, human: HumanMotion | None = None,
-                keyframes: bool = True) -> str:
-    """The report page as a string (see :func:`write_html_report`)."""
+                keyframes: bool = True, sections: Sequence[tuple[str, str]] = ()) -> str:
+    """The report page as a string (see :func:`write_html_report`); ``sections``: extra (title,
+    HTML body) pairs shown after the reasons (e.g. an edit's diff)."""
     meta = motion.meta
     title = f"motion2robot feasibility: {Path(str(meta.get('source', 'motion'))).name} on {robot.name}"
     ok = bool(report.feasible)
@@ -188,6 +189,7 @@ def render_html(report: Any, motion: RobotMotion, robot: Robot, *, human: HumanM
         legs = (f"Legs: {fb['mode']}, because {fb['why']}; {fb.get('what', '')}" if fb else "Legs: whole body, as generated.")
         parts.append(f"<h2>Tempo and legs</h2>{_list([tempo, legs])}")
     parts.append("<h2>Reasons</h2>" + (_list(report.reasons) if report.reasons else "<p>None: every check passed.</p>"))
+    parts += [f"<h2>{html.escape(t)}</h2>{body}" for t, body in sections]
     parts.append("<h2>Checks</h2>" + _checks_table(report))
     if getattr(report, "figures", None):
         parts.append("<h2>Figures</h2><table>" + "".join(
@@ -212,12 +214,13 @@ def render_html(report: Any, motion: RobotMotion, robot: Robot, *, human: HumanM
 
 
 def write_html_report(report: "FeasibilityReport", motion: RobotMotion, robot: Robot, path: str | Path, *,
-                      human: HumanMotion | None = None, keyframes: bool = True) -> Path:
+                      human: HumanMotion | None = None, keyframes: bool = True,
+                      sections: Sequence[tuple[str, str]] = ()) -> Path:
     """Write the self-contained HTML page for ``report`` (a FeasibilityReport of ``motion`` on
     ``robot``) to ``path``; ``human`` (optional) is drawn beside the robot in the key frames.
     Returns the path."""
     path = Path(path)
-    text = render_html(report, motion, robot, human=human, keyframes=keyframes)
+    text = render_html(report, motion, robot, human=human, keyframes=keyframes, sections=sections)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")
     return path

@@ -168,8 +168,12 @@ def _npy_bytes(a: np.ndarray) -> bytes:
 
 
 case("npz: member expands to 790 MB")(_bomb)
-case("npz: SMPL parameters")(lambda d: inspect(npz(d, poses=np.zeros((30, 156)), trans=np.zeros((30, 3)),
-                                                    mocap_framerate=np.asarray(60.0))))
+# SMPL parameters read with an approximate skeleton and a warning; --strict refuses them without a model
+case("npz: SMPL parameters under --strict")(lambda d: inspect(npz(d, poses=np.zeros((30, 156)), trans=np.zeros((30, 3)),
+                                                                  mocap_framerate=np.asarray(60.0)), "--strict"))
+case("npz: SMPL parameters, body model missing keys")(lambda d: inspect(
+    npz(d, poses=np.zeros((30, 156)), trans=np.zeros((30, 3)), mocap_framerate=np.asarray(60.0)),
+    "--body-model", str(npz(d, "model.npz", v_template=np.zeros((10, 3))))))
 
 # -- BVH -------------------------------------------------------------------------------------
 _HEAD, _MOTION = GOOD_BVH.split("MOTION\n")

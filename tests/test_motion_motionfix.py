@@ -1,0 +1,96 @@
+"""MotionFix/OmniME 207-d features: decoded joints equal the joints they were made from."""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motion2robot.cli import main
+from motion2robot.errors import InputFileError
+from motion2robot.motion import detect_format, from_tensor, read_motion
+from motion2robot.motion.motionfix import GROUPS
+from motion2robot.motion.rotations import matrix_from_6d, matrix_to_6d
+from tests._shared import MOTIONS, requires_shared
+from tests.motionfix_encoder import encode
+from tests.test_motion_support import walking_yup
+
+
+def test_6d_is_the_first_two_rows_and_gram_schmidt_recovers_the_matrix() -> None:
+    rng = np.random.default_rng(0)
+    q, _ = np.linalg.qr(rng.normal(size=(50, 3, 3)))
+    q *= np.sign(np.linalg.det(q))[:, None, None]
+    d6 = matrix_to_6d(q)
+    assert np.allclose(d6[:, :3], q[:, 0]) and np.allclose(d6[:, 3:], q[:, 1])
+    np.testing.assert_allclose(matrix_from_6d(d6 * 3.0), q, atol=1e-12)  # scale-free
+
+
+def _source(name: str):
+    return read_motion(MOTIONS / "humanml3d_joints" / f"{name}.npy")[0]
+
+
+def _save(path: Path, arr: np.ndarray) -> Path:
+    np.save(path, arr)
+    return path
+
+
+@requires_shared
+@pytest.mark.parametrize("name", ["007005", "011673", "012314", "M010968"])
+def test_207d_from_a_humanml3d_clip_decodes_to_its_joints(tmp_path: Path, name: str) -> None:
+    src = _source(name)
+    feat = encode(src.positions).astype(np.float32)
+    path = _save(tmp_path / "edit.npy", feat)
+    assert detect_format(path) == "motionfix_207"
+    m = read_motion(path)[0]
+    err = np.linalg.norm(m.positions - src.positions, axis=-1).max()
+    assert err < 1e-3, err  # float32 file
+    assert m.fps == 30.0 and m.meta["up_axis"] == "z" and "raw" in m.meta["features"]
+
+
+def _stats(feat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mean, std = feat.mean(axis=0), feat.std(axis=0) + 1e-3
+    return mean, std
+
+
+@requires_shared
+@pytest.mark.parametrize("layout", ["flat", "groups"])
+def test_normalised_207d_with_its_statistics_decodes_the_same(tmp_path: Path, layout: str) -> None:
+    src = _source("012314")
+    feat = encode(src.positions)
+    mean, std = _stats(feat)
+    stats = ({"mean": mean, "std": std} if layout == "flat"
+             else {n: {"mean": mean[s], "std": std[s]} for n, s in GROUPS})
+    (tmp_path / "stats.pkl").write_bytes(pickle.dumps(stats))
+    norm = _save(tmp_path / "norm.npy", (feat - mean) / std)
+    m = read_motion(norm, stats=tmp_path / "stats.pkl")[0]
+    assert np.linalg.norm(m.positions - src.positions, axis=-1).max() < 1e-6
+    assert "normalised" in m.meta["features"]
+    t = from_tensor((feat - mean) / std, layout="motionfix_207", mean=mean, std=std)[0]
+    np.testing.assert_allclose(t.positions, m.positions, atol=1e-9)
+    t2 = from_tensor((feat - mean) / std, layout="motionfix_207", mean=stats)[0]
+    np.testing.assert_allclose(t2.positions, m.positions, atol=1e-9)
+
+
+def test_bad_207d_input_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
+    walk = walking_yup(30)
+    zup = np.stack([walk[..., 2], walk[..., 0], walk[..., 1]], axis=-1)
+    feat = encode(zup)
+    wide = _save(tmp_path / "wide.npy", feat[:, :206])
+    assert main(["inspect", str(wide), "--format", "motionfix_207"]) == 2
+    err = capsys.readouterr().err
+    assert "(T, 207)" in err and err.count("\n") == 1
+    mean, std = _stats(feat)
+    (tmp_path / "short.pkl").write_bytes(pickle.dumps({"mean": mean[:200], "std": std[:200]}))
+    norm = _save(tmp_path / "norm.npy", (feat - mean) / std)
+    assert main(["inspect", str(norm), "--stats", str(tmp_path / "short.pkl")]) == 2
+    err = capsys.readouterr().err
+    assert "200 / 200 values" in err and err.count("\n") == 1
+    assert main(["inspect", str(norm)]) == 2
+    assert "--stats" in capsys.readouterr().err
+    (tmp_path / "evil.pkl").write_bytes(b"cos\nsystem\n(S'echo pwned'\ntR.")
+    assert main(["inspect", str(norm), "--stats", str(tmp_path / "evil.pkl")]) == 2
+    assert "refused" in capsys.readouterr().err
+    with pytest.raises(InputFileError, match="statistics of 5 / 5"):
+        from_tensor(feat, layout="motionfix_207", mean=mean[:5], std=std[:5])
