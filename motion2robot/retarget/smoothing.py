@@ -36,6 +36,9 @@ ARMATURE_SHARE = 0.3
 #: (quasi-static motions: the root acceleration target is g * ZMP_SHIFT / root height).
 ZMP_SHIFT = 0.01
 GRAVITY = 9.81
+#: Reweighting passes of :func:`smooth_jointly`: one weight per frame for every column converges
+#: more slowly than per column (at 100 fps, 16 passes left a stance's root 30 % over its target).
+JOINT_ITERATIONS = 40
 #: rad/s^2, acceleration limit of joints whose model declares no armature (as the validator).
 DEFAULT_ACCELERATION = 100.0
 
@@ -171,7 +174,7 @@ def smooth_hinges(q: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: 
 
 
 def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps: float,
-                   iterations: int = 16) -> np.ndarray:
+                   iterations: int = JOINT_ITERATIONS) -> np.ndarray:
     """(T, k) trajectories near ``x`` with ONE smoothing filter for every column: the rows
     (frames) whose speed or acceleration is over its target in any column get the same weights in
     all columns. Applied to a whole configuration (root and hinges together), the filtered path is
