@@ -105,3 +105,17 @@ def test_keys_from_another_thread_are_safe():
 def test_rejects_empty_clips():
     with pytest.raises(ValueError):
         Playback(0, 20.0)
+
+
+def test_the_caption_says_the_tempo_and_the_stance():
+    """A motion made slower or on the stance alternative says so in the viewer's and the video's caption."""
+    from motion2robot.robot import load_robot
+    from motion2robot.validate import examples
+    from motion2robot.viz.scene import make_playable
+
+    op3 = load_robot("op3")
+    m = examples.standing(op3).with_(meta={"source": "walk.bvh", "tempo": 1.6,
+                                           "fallback": {"mode": "stance", "why": "x", "what": "y"}})
+    title = make_playable(m, op3).title
+    assert "walk.bvh" in title and "tempo x1.60" in title and "legs: stance" in title
+    assert "stance" not in make_playable(examples.standing(op3), op3).title

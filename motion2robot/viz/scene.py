@@ -227,6 +227,11 @@ def make_playable(motion: RobotMotion, robot: Robot, *, human: HumanMotion | Non
     human beside it and the failing frames of ``report`` (a FeasibilityReport) marked."""
     src = motion.meta.get("source")
     title = f"{motion.robot}" + (f"  <- {Path(str(src)).name}" if src else "")
+    tempo, fallback = motion.meta.get("tempo"), motion.meta.get("fallback")
+    if tempo is not None and float(tempo) != 1.0:
+        title += f"  tempo x{float(tempo):.2f}"
+    if fallback:
+        title += f"  legs: {fallback.get('mode')}"
     return Playable(
         qpos=np.asarray(motion.qpos if qpos is None else qpos, dtype=float),
         fps=motion.fps,
