@@ -15,10 +15,18 @@
    joint-velocity clamp (:mod:`~motion2robot.retarget.constraints`); up to REPAIR_ROUNDS more
    such rounds while self-collision capsules still overlap (hinges at a velocity bound then free
    to take part in the projection step);
-5. exact root pass (:mod:`~motion2robot.retarget.root_pass`): rotate the root about the vertical
+5. one smoothing filter for root and hinges together (:func:`~.smoothing.smooth_jointly`), a
+   projection back onto the hard constraints, its pushes on free limbs spread over neighbouring
+   frames (:func:`~.smoothing.spread_correction`);
+6. dynamic balance (:mod:`~motion2robot.retarget.zmp_plan`): the ZMP brought inside the soles by a
+   planned CoM path the trajectory is projected onto (kept only where it helps);
+7. exact root pass (:mod:`~motion2robot.retarget.root_pass`): rotate the root about the vertical
    and translate it so no sole corner is below the floor and the stance sole neither slides nor
    spins (joint angles untouched);
-6. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
+8. per-frame figures (keypoint error, constraint residuals) into ``meta["solver"]``.
+
+Steps 1-8 are :func:`whole_body`. :func:`retarget` wraps them in the tempo and legs policy of
+:mod:`~motion2robot.retarget.executable` (attempts judged by ``check``).
 """
 
 from __future__ import annotations
@@ -60,6 +68,7 @@ from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, objective
 from motion2robot.retarget.targets import frame_params, initial_qpos
 from motion2robot.retarget.tempo import DEFAULT_CAP, parse_cap, parse_tempo
 from motion2robot.retarget.zmp_plan import MIN_SHIFT, cart_table_shift, com_boxes, multibody_zmp
+from motion2robot.robot.chains import free_limbs
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -169,13 +178,6 @@ def _residuals(problem: CompiledProblem, pts: tuple[np.ndarray, ...], kp: np.nda
     }
 
 
-def _free_limbs(robot: Robot) -> np.ndarray:
-    """(n,) bool hinges on no path from the root to a foot (arms, head, waist above the legs)."""
-    from motion2robot.validate.dynamics import foot_ancestor_mask
-
-    return ~foot_ancestor_mask(robot).any(axis=1)
-
-
 def _rate_weights(w: Weights, fps: float) -> Weights:
     """The temporal weights act on per-frame differences, which shrink as the rate grows: scaled by
     (fps / TEMPORAL_REFERENCE_FPS)^2 so a finer output rate does not loosen them (at 100 fps
@@ -220,7 +222,7 @@ def _dynamic_balance(problem: CompiledProblem, kp: np.ndarray, labels: np.ndarra
         return float(np.max(np.maximum(0.0, -support_margin(np.nan_to_num(zmp), planes)) * support, initial=0.0))
 
     figures = {"applied": False, "rounds": 0, "max_shift_m": 0.0}
-    Q0, violation = Q, np.zeros(len(Q))
+    Q0 = Q
     zmp, com = multibody_zmp(Q, fps, robot)
     figures["zmp_outside_before_m"] = before = outside(zmp)
     reach = ZMP_REACH * 2.0 * max(max(f.sole_half) for f in robot.config.feet)
@@ -234,18 +236,17 @@ def _dynamic_balance(problem: CompiledProblem, kp: np.ndarray, labels: np.ndarra
             break
         boxes = com_boxes(com[:, :2] + d, support, planes)
         P3 = frame_params(problem.spec, kp, labels, soles, boxes, support)
-        Q, violation = correct(problem, P3, Q, robot.lower, robot.upper, max_step, 2, extra=EXTRA_CORRECTIONS)
+        Q, _ = correct(problem, P3, Q, robot.lower, robot.upper, max_step, 2, extra=EXTRA_CORRECTIONS)
         Q[:, 7:] = clamp_velocity(Q[:, 7:], robot.velocity_limit, fps)
         figures["rounds"] += 1
         figures["max_shift_m"] = max(figures["max_shift_m"], float(np.abs(d).max()))
         zmp, com = multibody_zmp(Q, fps, robot)
     figures["zmp_outside_after_m"] = after = outside(zmp)
-    # the box rows are part of the violation; the other hard rows must hold as before
-    P_plain = frame_params(problem.spec, kp, labels, soles, planes, None)
-    hard = problem.violation_eval(len(Q))(Q, P_plain)[0].ravel() if figures["rounds"] else violation
-    if figures["rounds"] and after < before and float(np.max(hard, initial=0.0)) <= EXTRA_TOLERANCE:
-        figures["applied"] = True
-        return Q, figures
+    if figures["rounds"] and after < before:  # the other hard rows (no CoM boxes) must hold as before
+        P_plain = frame_params(problem.spec, kp, labels, soles, planes, None)
+        if float(np.max(problem.violation_eval(len(Q))(Q, P_plain)[0], initial=0.0)) <= EXTRA_TOLERANCE:
+            figures["applied"] = True
+            return Q, figures
     figures["zmp_outside_after_m"] = before
     return Q0, figures
 
@@ -347,7 +348,7 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
         smooth = Q
         Q, _ = correct(problem, P2, Q, lo, hi, max_step, 1, extra=EXTRA_CORRECTIONS)
         # the projection's pushes on free limbs (self-collision) spread over neighbouring frames
-        Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], _free_limbs(robot), human.fps)
+        Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], free_limbs(robot), human.fps)
         Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, human.fps), lo, hi)
         pts = None
     zmp_figures = None

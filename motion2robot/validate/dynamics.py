@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
 from motion2robot.validate.contact_forces import (
     CORNERS,
@@ -83,21 +84,6 @@ class Dynamics:
     def normal(self) -> np.ndarray:
         """(T, 2, 4) corner normal forces (N)."""
         return self.forces[..., 2]
-
-
-def foot_ancestor_mask(robot: Robot) -> np.ndarray:
-    """(n, 2) bool: hinge j moves foot k (lies on the path from the root to that foot)."""
-    m = robot.model
-    jbody = m.jnt_bodyid[np.asarray(robot.joint_ids)]
-    out = np.zeros((robot.n_joints, 2), dtype=bool)
-    for k, foot in enumerate(np.asarray(robot.foot_bodies)):
-        chain = set()
-        b = int(foot)
-        while b > 0:
-            chain.add(b)
-            b = int(m.body_parentid[b])
-        out[:, k] = [int(b) in chain for b in jbody]
-    return out
 
 
 def contact_rows(kin: Kinematics, robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
