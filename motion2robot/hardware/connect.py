@@ -43,7 +43,7 @@ def add_bus_options(p: argparse.ArgumentParser, *, required: bool = True) -> Non
     p.add_argument("--baud", type=BAUD, help="bus baud rate in bit/s (default: the robot config's, e.g. 2000000)")
     p.add_argument("--latency-ms", type=LATENCY_MS,
                    help="USB latency timer the SDK timeouts assume (ms; default 1 for a port, set the adapter to "
-                        "match; 4 for the virtual chain's pty)")
+                        "match; 10 for the virtual chain's pty)")
     p.add_argument("--no-wire-time", action="store_true", help="virtual chain: do not emulate byte times on the wire")
 
 
