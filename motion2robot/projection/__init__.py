@@ -1,0 +1,156 @@
+"""Projection onto what the robot can do: ``project(human) -> human'``.
+
+``project`` retargets a human motion with the default executable retargeting (tempo and legs
+chosen by ``check``, :mod:`~motion2robot.retarget.executable`) and maps the robot's motion back
+into the human's space, so a sampler can replace an intermediate sample by what the robot can
+actually perform, and a user can see the robot's version beside the original.
+
+The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematics):
+
+1. **time**: human frame i (at the human's rate f_h) is robot frame ``u_i = i * k * f_r / f_h``
+   (k: the tempo factor the retargeter chose, ``meta["tempo"]``; f_r: the robot motion's rate);
+   the robot's keypoints are interpolated there (Catmull-Rom, as the tempo stretch itself does),
+   its contact labels taken at the nearest frame;
+2. **scale**: the robot's keypoints are the targets the retargeter would have had for a human
+   whose pelvis path is scaled by ``legs`` and each bone by its group's ratio
+   (:func:`~motion2robot.retarget.scale.scaled_keypoints`, ratios from ``meta["scale"]``). That
+   map is inverted from the pelvis outwards, so scaling ``human'`` again gives back exactly the
+   robot's keypoints;
+3. **joints the robot has no keypoint for** (on the shipped robots the spine and collar joints,
+   all on the torso) are filled from the original pose rigidly in the torso frame: each keeps
+   its offset from the neck in the original's torso frame (up = spine1 -> neck, left = right hip
+   -> left hip), placed in the robot's torso frame (up = the robot torso's up axis, left = its
+   hip keypoints). So ``spine1' -> neck'`` points along the robot's torso exactly (the direction
+   the retargeter's ``torso_up`` term reads) and the collars ride with the robot's shoulders'
+   torso. A filled joint off the torso (a drafted robot without, say, wrists) keeps its offset
+   from its parent, turned with the torso the same way;
+4. **contacts**: ``human'.contacts`` are the contact labels the robot motion was made with, so
+   ``human'`` says where the robot's soles were planted;
+5. **target correction** (:func:`refine`): the retargeter's optimum for targets it can reach
+   exactly is not exactly the pose that reaches them (its regularisation, temporal and
+   orientation terms pull it away, a few mm at the robot's scale), and the scale it computes from
+   ``human'``'s own bone lengths differs slightly from the original's (a robot's leg keypoints
+   are not a rigid chain). So ``human'`` is corrected by fixed-point rounds
+   ``h <- h + (P(q0) - P(R(h)))`` (P: steps 1-4, R: the retargeting at the chosen tempo and legs,
+   q0 the robot motion of the original) until its robot motion is within :data:`TOLERANCE` rad
+   RMS of q0: ``human'`` is then a human motion whose retargeting *is* the robot motion, found
+   from the robot's own keypoints. :attr:`Projection.direct` keeps steps 1-4 alone (what the
+   viewer and the report draw).
+
+``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
+:attr:`Projection.positions` gives it in the input's own axes and units (for arrays and tensors:
+the layout the sampler holds, e.g. HumanML3D's y-up joints). The per-joint distance between the
+original and ``human'`` (metres, per frame) comes with it.
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from motion2robot.motion.human import SMPL22, HumanMotion
+from motion2robot.projection.correction import MEMORY, ROUNDS, TOLERANCE, chosen_solve, hinge_rms, refine
+from motion2robot.projection.inputs import MotionArrayError, as_human
+from motion2robot.projection.mapping import project_motion, robot_points
+from motion2robot.projection.maths import (
+    fill_torso,
+    from_canonical,
+    human_torso,
+    joint_distance,
+    robot_frames,
+    torso_rotations,
+    unscale,
+)
+from motion2robot.robot.robot import Robot
+from motion2robot.robot_motion import RobotMotion
+
+__all__ = ["MEMORY", "ROUNDS", "TOLERANCE", "MotionArrayError", "Projection", "as_human", "chosen_solve", "fill_torso",
+           "from_canonical", "hinge_rms", "human_torso", "joint_distance", "project", "project_motion", "refine",
+           "robot_frames", "robot_points", "torso_rotations", "unscale"]
+
+
+@dataclass(frozen=True, eq=False)
+class Projection:
+    """The result of :func:`project`.
+
+    human: ``human'``, the robot's version in the human's space (canonical frame, metres, the
+        original's frame count and fps; ``contacts`` the robot's planted soles).
+    original: the canonical human motion that was projected.
+    robot_motion: the robot motion ``human'`` was made from (the executable retargeting).
+    report: the ``check`` report of the chosen attempt (None when neither tempo nor legs was
+        ``auto``: nothing judged).
+    distance: (T, 22) distance (m) between each joint of the original and of ``human'``.
+    positions: (T, 22, 3) ``human'`` in the input's own axes and units (see the module text).
+    direct: the robot's keypoints mapped back without the target correction (steps 1-4).
+    rounds: the hinge RMS (rad) between the robot motion and the retargeting of each round's
+        ``human'`` (the last one is ``human``'s; see :func:`refine`).
+    """
+
+    human: HumanMotion
+    original: HumanMotion
+    robot_motion: RobotMotion
+    report: Any
+    distance: np.ndarray
+    positions: np.ndarray
+    direct: HumanMotion
+    rounds: tuple[float, ...] = ()
+
+    @property
+    def idempotence_rms(self) -> float | None:
+        """RMS (rad) over frames and hinges between the robot motion and the retargeting of
+        ``human'`` at the same tempo and legs, as the last correction round measured (None when
+        no round ran)."""
+        return self.rounds[-1] if self.rounds else None
+
+    @property
+    def executable(self) -> bool | None:
+        """The robot motion passed ``check`` (None when it was not judged)."""
+        return None if self.report is None else bool(self.report.feasible)
+
+    @property
+    def joint_distance(self) -> dict[str, float]:
+        """Mean over frames of the distance (m) per SMPL22 joint."""
+        return {name: float(d) for name, d in zip(SMPL22, self.distance.mean(axis=0))}
+
+    @property
+    def mean_distance(self) -> float:
+        """Mean over frames and joints of the distance (m)."""
+        return float(self.distance.mean())
+
+    def summary(self) -> str:
+        """One line: executability, tempo, fallback, mean and largest per-joint distance."""
+        meta = self.robot_motion.meta
+        worst = max(self.joint_distance.items(), key=lambda kv: kv[1])
+        fb = meta.get("fallback")
+        exe = {None: "not judged", True: "executable", False: "NOT executable"}[self.executable]
+        return (f"{self.robot_motion.robot}: {exe}, tempo x{float(meta.get('tempo', 1.0)):.2f}"
+                + (f", legs {fb['mode']}" if isinstance(fb, Mapping) else "")
+                + f"; human' is {100 * self.mean_distance:.1f} cm from the original on average "
+                  f"(largest: {worst[0]} {100 * worst[1]:.1f} cm)")
+
+
+def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, check_options: Any = None,
+            layout: str = "humanml3d_joints", fps: float | None = None, mean: Any = None, std: Any = None,
+            rounds: int = ROUNDS, tolerance: float = TOLERANCE) -> Projection:
+    """Project one human motion onto what ``robot`` can do (see the module text).
+
+    motion: a :class:`HumanMotion`, or one sample as a numpy array or tensor in ``layout``
+    ((T, 22, 3) HumanML3D joints, y up, metres, 20 fps unless ``fps``; (T, 263) features with
+    optional ``mean``/``std``; ...). options: RetargetOptions (default: the executable
+    retargeting, tempo and legs ``auto``); check_options: the judge's CheckOptions; rounds /
+    tolerance: of the target correction (:func:`refine`; ``rounds=1`` only measures).
+    Raises MotionArrayError (a ValueError and UserError) for bad arrays, UserError subclasses for
+    motions or robots that cannot be retargeted."""
+    from motion2robot.retarget.api import retarget_and_check
+    from motion2robot.robot.loader import load_robot
+
+    human = as_human(motion, layout=layout, fps=fps, mean=mean, std=std)
+    rb = robot if isinstance(robot, Robot) else load_robot(robot)
+    robot_motion, report = retarget_and_check(human, rb, options, check_options)
+    direct = project_motion(robot_motion, rb, human)
+    projected, errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance)
+    positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
+    return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
+                      distance=joint_distance(human.positions, projected.positions), positions=positions,
+                      direct=direct, rounds=errors)

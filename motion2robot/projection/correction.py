@@ -1,0 +1,94 @@
+"""The target correction (step 5 of :mod:`motion2robot.projection`): ``human'`` moved until its
+retargeting is the robot motion it was made from."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from motion2robot.motion.human import HumanMotion
+from motion2robot.projection.mapping import project_motion
+from motion2robot.robot.robot import Robot
+from motion2robot.robot_motion import RobotMotion
+
+#: Target of the correction rounds: RMS (rad) over frames and hinges between the robot motions of
+#: the original and of ``human'``.
+TOLERANCE = 1e-3
+#: Correction rounds at most (each one retargeting at the chosen tempo and legs, no judging).
+ROUNDS = 6
+#: Rounds remembered by the Anderson mixing of the correction.
+MEMORY = 4
+
+def hinge_rms(a: RobotMotion, b: RobotMotion) -> float:
+    """RMS (rad) over frames and hinges of two robot motions of the same length (inf otherwise)."""
+    if a.qpos.shape != b.qpos.shape:
+        return float("inf")
+    return float(np.sqrt(np.mean((a.qpos[:, 7:] - b.qpos[:, 7:]) ** 2)))
+
+
+def anderson_step(xs: list[np.ndarray], fs: list[np.ndarray]) -> np.ndarray:
+    """Next iterate of the fixed point x = x + f(x) by Anderson mixing over the history
+    (``xs``, ``fs``: flattened iterates and their residuals, oldest first): the combination of
+    the last iterates whose residuals cancel best (weights summing to 1, least squares), plus
+    its residual. With one entry: the plain step x + f."""
+    x, f = xs[-1], fs[-1]
+    if len(xs) < 2:
+        return x + f
+    dF = np.stack([fs[i + 1] - fs[i] for i in range(len(fs) - 1)], axis=1)
+    dX = np.stack([xs[i + 1] - xs[i] for i in range(len(xs) - 1)], axis=1)
+    gamma, *_ = np.linalg.lstsq(dF, f, rcond=None)
+    return x + f - (dX + dF) @ gamma
+
+
+def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callable[[HumanMotion], RobotMotion],
+           rounds: int = ROUNDS, tolerance: float = TOLERANCE,
+           memory: int = MEMORY) -> tuple[HumanMotion, tuple[float, ...]]:
+    """The target correction (step 5 of the module text): starting from ``direct`` (= P(motion)),
+    solve the fixed point ``P(solve(h)) = P(motion)`` for ``h`` by Anderson-accelerated rounds of
+    ``h <- h + (P(motion) - P(solve(h)))`` (:func:`anderson_step`, the last ``memory`` rounds)
+    until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion``. Returns the best ``h`` met and
+    the RMS of every round tried (a round whose solve changes the frame count stops the rounds)."""
+    shape = np.shape(direct.positions)
+    h, best, errors = direct, (float("inf"), direct), []
+    xs: list[np.ndarray] = []
+    fs: list[np.ndarray] = []
+    for _ in range(max(1, rounds)):
+        q = solve(h)
+        err = hinge_rms(q, motion)
+        errors.append(err)
+        if err < best[0]:
+            best = (err, h)
+        if err <= tolerance or not np.isfinite(err):
+            break
+        # compared at the scale this solve computed from h's bone lengths: the fixed point is in
+        # the robot's space (keypoints equal), not at the original's scale
+        goal = project_motion(motion.with_(meta={"scale": q.meta["scale"]}), robot, h).positions
+        xs.append(np.asarray(h.positions).ravel())
+        fs.append((goal - project_motion(q, robot, h).positions).ravel())
+        xs, fs = xs[-memory - 1:], fs[-memory - 1:]
+        h = h.with_(positions=anderson_step(xs, fs).reshape(shape))
+    return best[1], tuple(errors)
+
+
+def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[HumanMotion], RobotMotion]:
+    """The retargeting that made ``motion``, as one function of the human motion: its tempo factor
+    and the whole-body pipeline (a ``stance`` result's human' already stands in the stance, and
+    whole body is what the legs policy tries first), no judging."""
+    from dataclasses import replace
+
+    from motion2robot.motion.ops import resample
+    from motion2robot.retarget.api import RetargetOptions, whole_body
+    from motion2robot.retarget.tempo import stretch
+
+    opt = options or RetargetOptions()
+    inner = replace(opt, fps=None)
+    k = float(motion.meta.get("tempo") or 1.0)
+
+    def solve(h: HumanMotion) -> RobotMotion:
+        if opt.fps is not None and abs(opt.fps - h.fps) > 1e-9:
+            h = resample(h, opt.fps)
+        return whole_body(stretch(h, k), robot, inner)
+
+    return solve

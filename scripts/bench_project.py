@@ -1,0 +1,132 @@
+"""Benchmark of ``project(human) -> human'`` over the dev clips (one row per clip, as ``batch``
+expands ../shared/motions).
+
+Per clip, prints:
+- idempotence: RMS (rad, over frames and hinges) between the robot motion of ``human`` and the
+  default retargeting (tempo and legs judged by ``check``) of ``human'``; ``direct`` is the same
+  figure for the robot's keypoints mapped back without the target correction (round 1 of
+  :func:`~motion2robot.projection.refine`), ``rounds`` how many correction rounds ran;
+  "tempo differs" when the policy picked another tempo for ``human'`` (motions of different
+  lengths);
+- executability before (``human``'s robot motion) and after (``human'``'s), both the full
+  ``check`` with the physics playback, as the policy judged them;
+- the per-joint distance between ``human`` and ``human'`` (cm, mean over frames; mean over
+  joints and the largest joint);
+- the time of ``project`` per clip (wall seconds, on a shared 2-core machine).
+
+Run:  python scripts/bench_project.py [--robot op3] [--limit N] [--rounds 6] [--csv out.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from motion2robot.batch.work import expand_inputs
+from motion2robot.motion import read_motion
+from motion2robot.motion.human import SMPL22
+from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project
+from motion2robot.retarget import retarget_and_check
+from motion2robot.robot import load_robot
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
+
+
+def _verdict(ok: bool | None) -> str:
+    return {True: "yes", False: "no", None: "-"}[ok]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robot", default="op3")
+    ap.add_argument("--motions", default=str(SHARED))
+    ap.add_argument("--limit", type=int, default=None, help="first N clips only")
+    ap.add_argument("--rounds", type=int, default=ROUNDS, help=f"correction rounds at most (default {ROUNDS})")
+    ap.add_argument("--csv", default=None)
+    args = ap.parse_args()
+    if not Path(args.motions).is_dir():
+        print(f"no motions folder at {args.motions}", file=sys.stderr)
+        return 2
+    robot = load_robot(args.robot)
+    items = list(expand_inputs([args.motions]).items)[: args.limit]
+    rows = []
+    print(f"{'clip':44s} {'idem rad':>9s} {'direct':>7s} {'rnds':>4s} {'exe before':>10s} {'after':>5s} "
+          f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
+    for item in items:
+        name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                human = read_motion(item.path, clip=item.clip)[0]
+        except Exception as err:  # noqa: BLE001 - unreadable clips are not part of the figure
+            print(f"  skip {name}: {str(err).splitlines()[0][:100]}")
+            continue
+        t0 = time.perf_counter()
+        try:
+            p = project(human, robot, rounds=args.rounds)
+        except Exception as err:  # noqa: BLE001
+            print(f"  FAIL {name}: project: {str(err).splitlines()[0][:160]}")
+            continue
+        dt = time.perf_counter() - t0
+        again, report = retarget_and_check(p.human, robot)
+        rms = hinge_rms(p.robot_motion, again)
+        jd = p.joint_distance
+        worst = max(jd, key=jd.get)
+        row = {"clip": name, "idempotence": rms, "direct": p.rounds[0], "rounds": len(p.rounds),
+               "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
+               "tempo_again": float(again.meta.get("tempo", 1.0)),
+               "before": p.executable, "after": None if report is None else bool(report.feasible),
+               "dist_cm": 100 * p.mean_distance, "worst": worst, "worst_cm": 100 * jd[worst], "time_s": dt,
+               "joint_cm": {k: 100 * v for k, v in jd.items()}}
+        rows.append(row)
+        idem = f"{rms:9.4f}" if np.isfinite(rms) else f"{'tempo differs':>9s}"
+        print(f"{name[:44]:44s} {idem} {row['direct']:7.4f} {row['rounds']:4d} {_verdict(row['before']):>10s} "
+              f"{_verdict(row['after']):>5s} {row['dist_cm']:7.1f} {worst:>14s} {row['worst_cm']:5.1f} {dt:6.1f}",
+              flush=True)
+    if not rows:
+        print("no clip projected")
+        return 1
+    same = [r for r in rows if np.isfinite(r["idempotence"])]
+    idem = np.array([r["idempotence"] for r in same])
+    direct = np.array([r["direct"] for r in rows if np.isfinite(r["direct"])])
+    print(f"\n{robot.name}: {len(rows)} clips projected")
+    if same:
+        print(f"idempotence (default retargeting of human' vs of human), hinge RMS: median {np.median(idem):.4f} rad, "
+              f"max {idem.max():.4f} rad; within {TOLERANCE:g} rad: {int((idem <= TOLERANCE).sum())}/{len(same)}; "
+              f"within 0.01 rad: {int((idem <= 0.01).sum())}/{len(same)}")
+    if len(direct):
+        print(f"without the target correction (direct mapping back): median {np.median(direct):.4f} rad, "
+              f"max {direct.max():.4f} rad")
+    print(f"tempo chosen differently for human': {len(rows) - len(same)} clips")
+    was = [r for r in rows if r["before"]]
+    kept = [r for r in was if r["after"]]
+    print(f"executable before: {len(was)}/{len(rows)}; still executable after projection: {len(kept)}/{len(was)}"
+          + (f" (lost: {', '.join(r['clip'] for r in was if not r['after'])})" if len(kept) < len(was) else ""))
+    gained = [r for r in rows if r["before"] is False and r["after"]]
+    print(f"not executable before but executable after: {len(gained)}")
+    per_joint = {k: float(np.mean([r["joint_cm"][k] for r in rows])) for k in SMPL22}
+    print("per-joint distance human vs human' (cm, mean over clips): "
+          + ", ".join(f"{k} {v:.1f}" for k, v in per_joint.items()))
+    print(f"mean over joints: {np.mean([r['dist_cm'] for r in rows]):.1f} cm")
+    times = np.array([r["time_s"] for r in rows])
+    print(f"time per clip (project, wall): median {np.median(times):.1f} s, max {times.max():.1f} s")
+    if args.csv:
+        import csv
+        with open(args.csv, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["clip", "idempotence_rad", "direct_rad", "rounds", "tempo", "tempo_again", "executable_before",
+                        "executable_after", "distance_cm", "worst_joint", "worst_cm", "time_s"])
+            for r in rows:
+                w.writerow([r["clip"], r["idempotence"], r["direct"], r["rounds"], r["tempo"], r["tempo_again"],
+                            r["before"], r["after"], round(r["dist_cm"], 2), r["worst"], round(r["worst_cm"], 2),
+                            round(r["time_s"], 2)])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

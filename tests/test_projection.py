@@ -1,0 +1,181 @@
+"""``project(human) -> human'``: the maths on synthetic poses, the properties on a real clip."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from motion2robot.errors import UserError
+from motion2robot.motion.canonical import to_canonical
+from motion2robot.motion.human import KP, SMPL22
+from motion2robot.projection import (
+    MotionArrayError,
+    fill_torso,
+    from_canonical,
+    hinge_rms,
+    human_torso,
+    project,
+    robot_frames,
+    robot_points,
+    unscale,
+)
+from motion2robot.retarget.scale import Scale, scaled_keypoints
+from tests._shared import MOTIONS, requires_shared
+
+#: A short real clip: standing, raising and moving the left arm overhead (HumanML3D, 70 frames).
+CLIP = "humanml3d_joints/M010968.npy"
+
+
+def _pose(T: int = 5, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    base = np.zeros((len(SMPL22), 3))
+    for name, p in {"pelvis": (0, 0, 0.9), "left_hip": (0, 0.1, 0.85), "right_hip": (0, -0.1, 0.85),
+                    "spine1": (0, 0, 1.0), "spine2": (0, 0, 1.12), "spine3": (0, 0, 1.2), "neck": (0, 0, 1.4),
+                    "left_collar": (0, 0.07, 1.33), "right_collar": (0, -0.07, 1.33), "head": (0.03, 0, 1.55),
+                    "left_shoulder": (0, 0.18, 1.35), "right_shoulder": (0, -0.18, 1.35),
+                    "left_elbow": (0, 0.2, 1.1), "right_elbow": (0, -0.2, 1.1), "left_wrist": (0.05, 0.2, 0.85),
+                    "right_wrist": (0.05, -0.2, 0.85), "left_knee": (0.02, 0.1, 0.48), "right_knee": (0.02, -0.1, 0.48),
+                    "left_ankle": (0, 0.1, 0.08), "right_ankle": (0, -0.1, 0.08), "left_foot": (0.12, 0.1, 0.02),
+                    "right_foot": (0.12, -0.1, 0.02)}.items():
+        base[KP[name]] = p
+    return base + 0.02 * rng.standard_normal((T, len(SMPL22), 3))
+
+
+def test_unscale_gives_back_the_robot_keypoints_whatever_the_fill() -> None:
+    human = _pose()
+    scale = Scale(0.3, 0.45, 0.25)
+    mapped = np.array([n not in ("spine1", "spine2", "spine3", "left_collar", "right_collar") for n in SMPL22])
+    robot_like = scaled_keypoints(_pose(seed=1), Scale(0.31, 0.4, 0.27))  # not a scaled copy of human
+    for fill in (human, _pose(seed=2)):
+        back = unscale(robot_like, mapped, scale, fill)
+        assert np.allclose(scaled_keypoints(back, scale)[:, mapped], robot_like[:, mapped], atol=1e-12)
+        assert np.allclose(back[:, ~mapped], fill[:, ~mapped])
+    # the exact inverse when every joint is mapped
+    assert np.allclose(unscale(scaled_keypoints(human, scale), np.ones(22, bool), scale, human * 0), human)
+
+
+def test_fill_torso_points_the_spine_along_the_robot_torso_and_keeps_offsets() -> None:
+    original = _pose()
+    T = len(original)
+    mapped = np.array([n not in ("spine1", "spine2", "spine3", "left_collar", "right_collar") for n in SMPL22])
+    tilt = np.array([0.3, 0.0, 1.0]) / np.linalg.norm([0.3, 0.0, 1.0])
+    robot_up = np.tile(tilt, (T, 1))
+    filled = fill_torso(original, original + [0.5, 0.2, 0.0], robot_up, mapped)
+    spine = filled[:, KP["neck"]] - filled[:, KP["spine1"]]
+    assert np.allclose(spine / np.linalg.norm(spine, axis=1, keepdims=True), tilt, atol=1e-9)
+    for name in ("spine1", "spine2", "left_collar"):  # rigid in the torso frame: distances to the neck kept
+        d0 = np.linalg.norm(original[:, KP[name]] - original[:, KP["neck"]], axis=1)
+        d1 = np.linalg.norm(filled[:, KP[name]] - filled[:, KP["neck"]], axis=1)
+        assert np.allclose(d0, d1)
+    assert np.allclose(filled[:, mapped], original[:, mapped] + [0.5, 0.2, 0.0])  # mapped rows untouched
+    R = human_torso(original)
+    assert np.allclose(np.einsum("tij,tik->tjk", R, R), np.eye(3), atol=1e-9)
+
+
+def test_robot_frames_undo_the_tempo_and_the_rate() -> None:
+    assert np.allclose(robot_frames(5, 20.0, 20.0, 2.0, 9), [0, 2, 4, 6, 8])
+    assert np.allclose(robot_frames(3, 20.0, 100.0, 1.0, 11), [0, 5, 10])
+    assert robot_frames(4, 20.0, 20.0, 3.0, 8)[-1] == 7  # clamped to the last robot frame
+
+
+def test_from_canonical_inverts_the_readers_transform() -> None:
+    theta = 0.7
+    rz = np.array([[np.cos(theta), -np.sin(theta), 0], [np.sin(theta), np.cos(theta), 0], [0, 0, 1]])
+    yup = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], dtype=float)
+    tr = {"matrix": (rz @ yup * 0.01).tolist(), "offset": [0.1, -0.2, 0.3]}
+    pts = _pose() * 100
+    assert np.allclose(from_canonical(tr, to_canonical(tr, pts)), pts)
+    assert np.allclose(from_canonical(None, pts), pts)
+
+
+def test_bad_input_is_a_clear_exception() -> None:
+    good = _pose(10)
+    with pytest.raises(MotionArrayError, match=r"shape \(10, 21, 3\).*\(T, 22, 3\)"):
+        project(good[:, :21])
+    with pytest.raises(MotionArrayError, match="one sample at a time"):
+        project(np.stack([good, good]))
+    bad = good.copy()
+    bad[4, 3, 1] = np.nan
+    with pytest.raises(MotionArrayError, match="NaN/inf values in 1 frame.*frame 4"):
+        project(bad)
+    with pytest.raises(MotionArrayError, match="unknown layout"):
+        project(good, layout="smpl")
+    with pytest.raises(MotionArrayError, match="not numbers"):
+        project(np.full((10, 22, 3), "a"))
+    err = MotionArrayError("x")
+    assert isinstance(err, ValueError) and isinstance(err, UserError)
+
+
+class _FakeTensor:
+    """Quacks like a torch tensor on a GPU: detach() -> cpu() -> numpy()."""
+
+    def __init__(self, a: np.ndarray):
+        self.a = a
+
+    def detach(self) -> "_FakeTensor":
+        return self
+
+    def cpu(self) -> "_FakeTensor":
+        return self
+
+    def numpy(self) -> np.ndarray:
+        return self.a
+
+
+@functools.lru_cache(maxsize=1)
+def _projected():
+    raw = np.load(MOTIONS / CLIP)
+    return raw, project(_FakeTensor(raw), "op3")
+
+
+@requires_shared
+def test_projection_of_a_real_clip_keeps_its_frame_shape_and_executability() -> None:
+    raw, p = _projected()
+    assert p.positions.shape == raw.shape and p.human.num_frames == len(raw) and p.human.fps == 20.0
+    # positions are in the input's own (y-up HumanML3D) frame: the distance there is the same figure
+    assert np.allclose(np.linalg.norm(p.positions - raw, axis=-1), p.distance, atol=1e-6)
+    assert p.distance.shape == (len(raw), 22) and set(p.joint_distance) == set(SMPL22)
+    jd = p.joint_distance
+    # the robot's head cannot follow the person's (op3 head tilt +-0.7 rad), its legs stand as the person's
+    assert 0.0 < jd["left_ankle"] < jd["head"] and 0.0 < p.mean_distance < 0.3
+    assert p.executable is True and p.human.contacts is not None
+    assert "executable" in p.summary() and "cm" in p.summary()
+
+
+@requires_shared
+def test_idempotence_on_a_real_clip() -> None:
+    from motion2robot.retarget import retarget_and_check
+
+    _, p = _projected()
+    again, report = retarget_and_check(p.human, _robot())
+    assert report is not None and report.feasible  # executable whenever human was
+    rms = hinge_rms(p.robot_motion, again)
+    # the direct mapping back is 0.07 rad away; the corrected human' within 0.01 rad (measured 0.006)
+    assert p.rounds[0] > 0.03 and rms < 0.015 and rms < p.rounds[0] / 4
+
+
+def _robot():
+    from motion2robot.robot import load_robot
+
+    return load_robot("op3")
+
+
+@requires_shared
+def test_direct_mapping_hits_the_robot_keypoints_at_the_slower_tempo() -> None:
+    from motion2robot.motion import read_motion
+    from motion2robot.retarget import RetargetOptions
+
+    robot = _robot()
+    human = read_motion(MOTIONS / CLIP)[0]
+    p = project(human, robot, options=RetargetOptions(tempo=2.0, legs="whole"), rounds=1)
+    assert p.report is None and p.executable is None  # nothing judged at a fixed tempo and legs
+    assert p.robot_motion.num_frames == 2 * (human.num_frames - 1) + 1 and p.human.num_frames == human.num_frames
+    pts, mapped, _ = robot_points(p.robot_motion, robot)
+    s = p.robot_motion.meta["scale"]
+    scaled = scaled_keypoints(p.direct.positions, Scale(s["legs"], s["arms"], s["height"]))
+    # human frame i is robot frame 2i: scaling human' back lands on the robot's keypoints exactly
+    assert np.abs(scaled[:, mapped] - pts[::2][:, mapped]).max() < 1e-9
+    assert p.human.contacts.shape == (human.num_frames, 2)
+    assert np.array_equal(p.human.contacts, np.asarray(p.robot_motion.meta["contacts"], bool)[::2])
