@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import html
 
 import numpy as np
 import pytest
@@ -179,3 +180,26 @@ def test_direct_mapping_hits_the_robot_keypoints_at_the_slower_tempo() -> None:
     assert np.abs(scaled[:, mapped] - pts[::2][:, mapped]).max() < 1e-9
     assert p.human.contacts.shape == (human.num_frames, 2)
     assert np.array_equal(p.human.contacts, np.asarray(p.robot_motion.meta["contacts"], bool)[::2])
+
+
+@requires_shared
+def test_viewer_draws_the_robots_version_on_the_human_and_the_report_lists_distances() -> None:
+    from motion2robot.viz.html_report import projection_section, render_html
+    from motion2robot.viz.scene import SceneOptions, human_tracks, make_playable
+
+    _, p = _projected()
+    robot = _robot()
+    human, projected = human_tracks(p.robot_motion, robot, p.original, SceneOptions(projected=True))
+    assert projected.shape == human.shape == (p.robot_motion.num_frames, 22, 3)
+    pts, mapped, _ = robot_points(p.robot_motion, robot)
+    # the blue skeleton is the robot's keypoints, moved as a whole to where the human skeleton is drawn
+    gap = projected[:, mapped] - pts[:, mapped]
+    assert np.abs(gap - gap[0, 0]).max() < 1e-6 and abs(gap[0, 0, 2]) < 1e-9
+    assert np.abs(human - projected).max() > 0.01  # the two differ where the robot could not follow
+    assert human_tracks(p.robot_motion, robot, p.original, SceneOptions())[1] is None  # off by default
+    play = make_playable(p.robot_motion, robot, human=p.original, options=SceneOptions(projected=True))
+    assert play.projected is not None and "blue: the robot's version" in play.title
+    title, body = projection_section(p.robot_motion, robot, p.original)
+    assert body.count("<tr>") == 23 and "head" in body
+    page = render_html(p.report, p.robot_motion, robot, human=p.original, keyframes=False)
+    assert html.escape(title) in page

@@ -2,7 +2,8 @@
 
 The input is a robot motion ``.npz`` (from ``motion2robot retarget``) or a human motion file,
 which is retargeted on the fly. The scaled human skeleton is drawn beside the robot and the frames
-that fail the feasibility checks are marked in red.
+that fail the feasibility checks are marked in red; ``--projected`` adds the robot's version in
+the human's space over the human skeleton (:mod:`motion2robot.projection`).
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--camera", choices=MODES, default="follow", help="follow the subjects or frame the whole path (default follow)")
     p.add_argument("--video-fps", type=float, help="video frame rate (default: the motion's, at most 30)")
     p.add_argument("--human", choices=PLACEMENTS, default="beside", help="draw the human skeleton beside the robot, over it, or not")
+    p.add_argument("--projected", action="store_true",
+                   help="also draw the robot's version in the human's space (blue, over the human skeleton): "
+                        "the robot's keypoints mapped back to the human's scale and tempo")
     p.add_argument("--no-check", action="store_true", help="skip the feasibility checks (no failing frames marked)")
     p.add_argument("--once", action="store_true", help="viewer: stop at the last frame instead of looping")
     p.add_argument("--speed", type=float, default=1.0, help="viewer playback speed (default 1)")
@@ -63,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
 
         report = check(motion, robot, CheckOptions(physics=args.physics))
     qpos = rollout_qpos(motion, robot, report) if args.physics else None
-    play = make_playable(motion, robot, human=human, report=report, options=SceneOptions(human=args.human), qpos=qpos)
+    play = make_playable(motion, robot, human=human, report=report, options=SceneOptions(human=args.human, projected=args.projected), qpos=qpos)
     world = make_world(robot)
     if not args.render:
         from motion2robot.viz.viewer import play_in_viewer

@@ -138,8 +138,10 @@ def render_key_frames(report: Any, motion: RobotMotion, robot: Robot, human: Hum
     from motion2robot.viz.render import render_frames
     from motion2robot.viz.scene import make_playable
 
+    from motion2robot.viz.scene import SceneOptions
+
     keys = key_frames(report, motion.num_frames)
-    play = make_playable(motion, robot, human=human, report=report)
+    play = make_playable(motion, robot, human=human, report=report, options=SceneOptions(projected=True))
     images = render_frames(make_world(robot), play, [f for _, f in keys], size=size, camera="follow")
     out = []
     for (cap, f), img in zip(keys, images):
@@ -163,6 +165,33 @@ def _checks_table(report: Any) -> str:
         rows.append(f"<tr><td>{html.escape(name)}</td><td class=\"{cls}\">{word}</td>"
                     f"<td>{html.escape(frame_ranges(frames)) or '&ndash;'}</td><td>{figs}</td></tr>")
     return '<table class="verdict-table">' + "".join(rows) + "</table>"
+
+
+def projection_section(motion: RobotMotion, robot: Robot, human: HumanMotion | None) -> tuple[str, str] | None:
+    """("The robot's version in the human's space", HTML) : the per-joint distance (cm, mean and
+    largest over frames) between the human and the robot's keypoints mapped back onto the human
+    skeleton (:func:`motion2robot.projection.project_motion`); None when the human or the
+    retargeter's meta is unknown."""
+    from motion2robot.projection import joint_distance, project_motion
+    from motion2robot.viz.scene import load_source_human
+
+    human = human if human is not None else load_source_human(motion.meta)
+    if human is None:
+        return None
+    try:
+        d = joint_distance(human.positions, project_motion(motion, robot, human).positions)
+    except UserError:
+        return None
+    from motion2robot.motion.human import SMPL22
+
+    order = np.argsort(-d.mean(axis=0))
+    rows = "".join(f"<tr><td>{SMPL22[j]}</td><td>{100 * d[:, j].mean():.1f}</td><td>{100 * d[:, j].max():.1f}</td></tr>"
+                   for j in order)
+    body = (f"<p>The robot's keypoints mapped back onto the human skeleton at the human's scale and tempo "
+            f"(blue skeleton in the key frames, over the human's): {100 * d.mean():.1f} cm from the human on "
+            f"average. Distance per joint, cm:</p><table><tr><th>joint</th><th>mean</th><th>largest</th></tr>"
+            f"{rows}</table>")
+    return "The robot's version in the human's space", body
 
 
 def _list(items: Sequence[str]) -> str:
@@ -189,7 +218,8 @@ def render_html(report: Any, motion: RobotMotion, robot: Robot, *, human: HumanM
         legs = (f"Legs: {fb['mode']}, because {fb['why']}; {fb.get('what', '')}" if fb else "Legs: whole body, as generated.")
         parts.append(f"<h2>Tempo and legs</h2>{_list([tempo, legs])}")
     parts.append("<h2>Reasons</h2>" + (_list(report.reasons) if report.reasons else "<p>None: every check passed.</p>"))
-    parts += [f"<h2>{html.escape(t)}</h2>{body}" for t, body in sections]
+    projected = projection_section(motion, robot, human)
+    parts += [f"<h2>{html.escape(t)}</h2>{body}" for t, body in (*sections, *([projected] if projected else []))]
     parts.append("<h2>Checks</h2>" + _checks_table(report))
     if getattr(report, "figures", None):
         parts.append("<h2>Figures</h2><table>" + "".join(

@@ -1,4 +1,6 @@
-"""What is drawn: the robot's world, the (scaled) human skeleton beside it, failing frames in red.
+"""What is drawn: the robot's world, the (scaled) human skeleton beside it, failing frames in red,
+and optionally the robot's version of the human (:func:`motion2robot.projection.project_motion`,
+the robot's keypoints mapped back onto the human skeleton) drawn in blue over the human skeleton.
 
 The human skeleton is not part of the MuJoCo model: it is added to an ``MjvScene`` each frame as
 user geoms (capsules between SMPL22 parent/child keypoints). Positions are metres in the robot's
@@ -15,6 +17,7 @@ from typing import Any, Mapping
 import mujoco
 import numpy as np
 
+from motion2robot.errors import UserError
 from motion2robot.motion.human import SMPL22, SMPL22_PARENTS, HumanMotion
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
@@ -25,6 +28,7 @@ log = logging.getLogger(__name__)
 BONES: tuple[tuple[int, int], ...] = tuple((p, c) for c, p in enumerate(SMPL22_PARENTS) if p >= 0)
 HUMAN_RGBA = np.array([0.95, 0.65, 0.2, 0.9], dtype=np.float32)
 FAIL_RGBA = np.array([0.9, 0.1, 0.1, 1.0], dtype=np.float32)
+PROJECTED_RGBA = np.array([0.15, 0.45, 0.95, 0.9], dtype=np.float32)
 PLACEMENTS = ("beside", "overlay", "off")
 
 
@@ -32,11 +36,13 @@ PLACEMENTS = ("beside", "overlay", "off")
 class SceneOptions:
     """human: ``beside`` (shifted sideways by ``side_offset`` metres, default from the robot's
     height), ``overlay`` (on the robot) or ``off``; ``tint``: how strongly failing frames turn the
-    robot red (0..1)."""
+    robot red (0..1); ``projected``: also draw the robot's version in the human's space (blue),
+    placed with the human skeleton so the two compare joint by joint."""
 
     human: str = "beside"
     side_offset: float | None = None
     tint: float = 0.6
+    projected: bool = False
 
     def offset_for(self, robot: Robot) -> float:
         if self.human != "beside":
@@ -111,21 +117,18 @@ def resample_positions(positions: np.ndarray, fps_in: float, n_out: int, fps_out
     return positions[i0] * (1 - w) + positions[i1] * w
 
 
-def human_track(motion: RobotMotion, robot: Robot, human: HumanMotion | None = None,
-                options: SceneOptions = SceneOptions()) -> np.ndarray | None:
-    """(T, 22, 3) scaled human keypoints for each robot frame, in the robot's world frame, shifted
-    sideways (+y, the robot's left) for ``beside``; None when ``off`` or unknown.
+def _scaled_track(motion: RobotMotion, robot: Robot, human: HumanMotion) -> np.ndarray:
+    """(T_robot, 22, 3) scaled keypoints of ``human`` at each robot frame: human time runs
+    ``meta["tempo"]`` times slower on the robot (the tempo stretch)."""
+    tempo = float(motion.meta.get("tempo") or 1.0)
+    return resample_positions(scaled_human(human.positions, motion.meta, robot), human.fps / tempo,
+                              motion.num_frames, motion.fps)
 
-    Scale: see :func:`scaled_human`.
-    Placement: the scaled pelvis ground path is aligned with ``meta["human_root_xy"]`` when the
-    retargeter stored it, else its frame-0 position with the robot root's."""
-    if options.human == "off":
-        return None
-    human = human if human is not None else load_source_human(motion.meta)
-    if human is None:
-        return None
-    pos = resample_positions(scaled_human(human.positions, motion.meta, robot), human.fps,
-                             motion.num_frames, motion.fps)
+
+def _placement(pos: np.ndarray, motion: RobotMotion, robot: Robot, options: SceneOptions) -> np.ndarray:
+    """(2,) xy shift of a scaled track: its pelvis ground path aligned with ``meta["human_root_xy"]``
+    when the retargeter stored it, else its frame-0 position with the robot root's; plus the
+    sideways offset of ``beside``."""
     pelvis = pos[:, SMPL22.index("pelvis"), :2]
     ref = motion.meta.get("human_root_xy")
     ref = np.asarray(ref, dtype=float) if ref is not None else None
@@ -133,9 +136,45 @@ def human_track(motion: RobotMotion, robot: Robot, human: HumanMotion | None = N
         shift = np.mean(ref - pelvis, axis=0)
     else:
         shift = motion.qpos[0, :2] - pelvis[0]
+    return shift + [0.0, options.offset_for(robot)]
+
+
+def human_track(motion: RobotMotion, robot: Robot, human: HumanMotion | None = None,
+                options: SceneOptions = SceneOptions()) -> np.ndarray | None:
+    """(T, 22, 3) scaled human keypoints for each robot frame, in the robot's world frame, shifted
+    sideways (+y, the robot's left) for ``beside``; None when ``off`` or unknown.
+
+    Scale: see :func:`scaled_human`; time: the robot's tempo factor undone.
+    Placement: the scaled pelvis ground path is aligned with ``meta["human_root_xy"]`` when the
+    retargeter stored it, else its frame-0 position with the robot root's."""
+    tracks = human_tracks(motion, robot, human, options)
+    return tracks[0] if tracks else None
+
+
+def human_tracks(motion: RobotMotion, robot: Robot, human: HumanMotion | None = None,
+                 options: SceneOptions = SceneOptions()) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """(human track, projected track or None) placed as :func:`human_track` says; the projected
+    one (``options.projected``) is ``human'`` of :func:`motion2robot.projection.project_motion`,
+    scaled and placed exactly as the human (it lies on the human where the robot did what the
+    person did). None when the human is ``off`` or unknown."""
+    if options.human == "off":
+        return None
+    human = human if human is not None else load_source_human(motion.meta)
+    if human is None:
+        return None
+    pos = _scaled_track(motion, robot, human)
+    shift = _placement(pos, motion, robot, options)
     pos[:, :, :2] += shift
-    pos[:, :, 1] += options.offset_for(robot)
-    return pos
+    projected = None
+    if options.projected:
+        from motion2robot.projection import project_motion
+
+        try:
+            projected = _scaled_track(motion, robot, project_motion(motion, robot, human))
+            projected[:, :, :2] += shift
+        except UserError as err:  # e.g. a motion made without the retargeter's meta (no scale)
+            log.warning("the robot's version in the human's space is not shown: %s", err)
+    return pos, projected
 
 
 def add_skeleton(scene: mujoco.MjvScene, points: np.ndarray, rgba: np.ndarray = HUMAN_RGBA,
@@ -190,7 +229,8 @@ class Playable:
     qpos: (T, nq) robot poses (kinematic replay or physics rollout); fps: frames per second;
     human: (T, 22, 3) skeleton keypoints or None; failing: {frame: [failed check names]};
     title: one line (robot, source); tint: failing-frame red blend (0..1); height: the robot's
-    visual height (m), for camera framing."""
+    visual height (m), for camera framing; projected: (T, 22, 3) the robot's version in the
+    human's space (drawn blue) or None."""
 
     qpos: np.ndarray
     fps: float
@@ -199,6 +239,7 @@ class Playable:
     title: str = ""
     tint: float = 0.6
     height: float = 1.0
+    projected: np.ndarray | None = None
 
     @property
     def num_frames(self) -> int:
@@ -209,8 +250,11 @@ class Playable:
         if frame in self.failing:
             tint_robot(scene, model, self.tint)
             add_marker(scene, np.array([*self.qpos[frame, :2], 0.002]), 0.35 * self.height)
+        radius = max(0.005, 0.025 * self.height)
         if self.human is not None:
-            add_skeleton(scene, self.human[min(frame, len(self.human) - 1)], radius=max(0.005, 0.025 * self.height))
+            add_skeleton(scene, self.human[min(frame, len(self.human) - 1)], radius=radius)
+        if self.projected is not None:
+            add_skeleton(scene, self.projected[min(frame, len(self.projected) - 1)], PROJECTED_RGBA, 0.8 * radius)
 
     def label(self, frame: int) -> str:
         """Overlay text: frame, time and the checks failing there."""
@@ -232,10 +276,14 @@ def make_playable(motion: RobotMotion, robot: Robot, *, human: HumanMotion | Non
         title += f"  tempo x{float(tempo):.2f}"
     if fallback:
         title += f"  legs: {fallback.get('mode')}"
+    tracks = human_tracks(motion, robot, human, options)
+    if tracks is not None and tracks[1] is not None:
+        title += "  blue: the robot's version"
     return Playable(
         qpos=np.asarray(motion.qpos if qpos is None else qpos, dtype=float),
         fps=motion.fps,
-        human=human_track(motion, robot, human, options),
+        human=tracks[0] if tracks else None,
+        projected=tracks[1] if tracks else None,
         failing=failing_frames(report),
         title=title,
         tint=options.tint,
