@@ -129,8 +129,8 @@ def main() -> int:
                         "executable_before", "executable_after", "distance_cm", "worst_joint", "worst_cm", "time_s"])
             for r in rows:
                 w.writerow([r["clip"], r["idempotence"], r["direct"], r["rounds"], r["legs"], r["tempo"],
-                            r["tempo_again"], r["before"], r["after"], round(r["dist_cm"], 2), r["worst"], round(r["worst_cm"], 2),
-                            round(r["time_s"], 2)])
+                            r["tempo_again"], r["before"], r["after"], round(r["dist_cm"], 2), r["worst"],
+                            round(r["worst_cm"], 2), round(r["time_s"], 2)])
     return 0
 
 
