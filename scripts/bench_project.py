@@ -8,6 +8,9 @@ Per clip, prints:
   :func:`~motion2robot.projection.refine`), ``rounds`` how many correction rounds ran;
   "tempo differs" when the policy picked another tempo for ``human'`` (motions of different
   lengths);
+- keypoints: mean distance (mm, robot scale) between the robot's keypoints in the two robot
+  motions, the same comparison in space (a nearly straight knee moves its keypoint by 0.05 mm per
+  mrad: the hinge RMS weighs such ill-conditioned joints heavily);
 - executability before (``human``'s robot motion) and after (``human'``'s), both the full
   ``check`` with the physics playback, as the policy judged them;
 - the per-joint distance between ``human`` and ``human'`` (cm, mean over frames; mean over
@@ -30,7 +33,7 @@ import numpy as np
 from motion2robot.batch.work import expand_inputs
 from motion2robot.motion import read_motion
 from motion2robot.motion.human import SMPL22
-from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project
+from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project, robot_points
 from motion2robot.retarget import retarget_and_check
 from motion2robot.robot import load_robot
 
@@ -39,6 +42,15 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 def _verdict(ok: bool | None) -> str:
     return {True: "yes", False: "no", None: "-"}[ok]
+
+
+def keypoint_gap_mm(a, b, robot) -> float:
+    """Mean distance (mm) between the tracked keypoints of two robot motions of the same length."""
+    if a.qpos.shape != b.qpos.shape:
+        return float("nan")
+    pa, mapped, _ = robot_points(a, robot)
+    pb, _, _ = robot_points(b, robot)
+    return 1000.0 * float(np.linalg.norm(pa - pb, axis=-1)[:, mapped].mean())
 
 
 def main() -> int:
@@ -55,7 +67,8 @@ def main() -> int:
     robot = load_robot(args.robot)
     items = list(expand_inputs([args.motions]).items)[: args.limit]
     rows = []
-    print(f"{'clip':44s} {'idem rad':>9s} {'direct':>7s} {'rnds':>4s} {'legs':>6s} {'exe before':>10s} {'after':>5s} "
+    print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'rnds':>4s} {'legs':>6s} "
+          f"{'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
     for item in items:
         name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
@@ -75,10 +88,11 @@ def main() -> int:
         dt = time.perf_counter() - t0
         again, report = retarget_and_check(p.human, robot)
         rms = hinge_rms(p.robot_motion, again)
+        gap = keypoint_gap_mm(p.robot_motion, again, robot)
         jd = p.joint_distance
         worst = max(jd, key=jd.get)
         fallback = p.robot_motion.meta.get("fallback")
-        row = {"clip": name, "idempotence": rms, "direct": p.rounds[0], "rounds": len(p.rounds),
+        row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "rounds": len(p.rounds),
                "legs": fallback["mode"] if isinstance(fallback, dict) else "whole",
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
                "tempo_again": float(again.meta.get("tempo", 1.0)),
@@ -87,7 +101,7 @@ def main() -> int:
                "joint_cm": {k: 100 * v for k, v in jd.items()}}
         rows.append(row)
         idem = f"{rms:9.4f}" if np.isfinite(rms) else f"{'tempo differs':>9s}"
-        print(f"{name[:44]:44s} {idem} {row['direct']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
+        print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
               f"{_verdict(row['before']):>10s} "
               f"{_verdict(row['after']):>5s} {row['dist_cm']:7.1f} {worst:>14s} {row['worst_cm']:5.1f} {dt:6.1f}",
               flush=True)
@@ -102,6 +116,9 @@ def main() -> int:
         print(f"idempotence (default retargeting of human' vs of human), hinge RMS: median {np.median(idem):.4f} rad, "
               f"max {idem.max():.4f} rad; within {TOLERANCE:g} rad: {int((idem <= TOLERANCE).sum())}/{len(same)}; "
               f"within 0.01 rad: {int((idem <= 0.01).sum())}/{len(same)}")
+        gaps = np.array([r["kp_mm"] for r in same])
+        print(f"the same comparison in space, robot keypoints: median {np.median(gaps):.2f} mm, "
+              f"max {gaps.max():.2f} mm")
     if len(direct):
         print(f"without the target correction (direct mapping back): median {np.median(direct):.4f} rad, "
               f"max {direct.max():.4f} rad")

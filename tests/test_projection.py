@@ -203,3 +203,15 @@ def test_viewer_draws_the_robots_version_on_the_human_and_the_report_lists_dista
     assert body.count("<tr>") == 23 and "head" in body
     page = render_html(p.report, p.robot_motion, robot, human=p.original, keyframes=False)
     assert html.escape(title) in page
+
+
+@requires_shared
+def test_feature_input_comes_back_as_humanml3d_joints() -> None:
+    from motion2robot.projection import as_human
+
+    feats = np.load(MOTIONS / "humanml3d_vecs" / "M010968.npy")
+    human = as_human(_FakeTensor(feats), layout="humanml3d_vecs")
+    joints = np.load(MOTIONS / CLIP)  # the same clip as joints: what p.positions holds for feature input
+    assert np.abs(from_canonical(human.meta["canonical_transform"], human.positions) - joints).max() < 1e-4
+    with pytest.raises(MotionArrayError, match="one sample at a time"):
+        as_human(feats[None].repeat(2, 0), layout="humanml3d_vecs")

@@ -17,9 +17,10 @@ from motion2robot.robot_motion import RobotMotion
 #: the original and of ``human'``.
 TOLERANCE = 1e-3
 #: Correction rounds at most (each one retargeting at the chosen tempo and legs, no judging).
-ROUNDS = 6
+ROUNDS = 8
 #: Rounds remembered by the Anderson mixing of the correction.
 MEMORY = 4
+
 
 def hinge_rms(a: RobotMotion, b: RobotMotion) -> float:
     """RMS (rad) over frames and hinges of two robot motions of the same length (inf otherwise)."""

@@ -11,6 +11,10 @@ from motion2robot.errors import UserError
 from motion2robot.motion.human import HumanMotion
 
 
+#: Shape of one sample (after the frame axis) per layout of :mod:`~motion2robot.motion.tensors`.
+SAMPLE_SHAPE: dict[str, tuple[int, ...]] = {"humanml3d_joints": (22, 3), "humanml3d_vecs": (263,), "motionfix_207": (207,)}
+
+
 class MotionArrayError(UserError, ValueError):
     """An in-process motion (numpy array or tensor) has the wrong shape or non-finite values."""
 
@@ -29,8 +33,8 @@ def as_human(motion: Any, *, layout: str = "humanml3d_joints", fps: float | None
         if layout not in LAYOUTS:
             raise MotionArrayError(f"project: unknown layout {layout!r}; use one of {', '.join(LAYOUTS)}")
         arr = to_numpy(motion)
-        want = {"humanml3d_joints": "(T, 22, 3)", "humanml3d_vecs": "(T, 263)", "motionfix_207": "(T, 207)"}[layout]
-        tail = {"humanml3d_joints": (22, 3), "humanml3d_vecs": (263,), "motionfix_207": (207,)}[layout]
+        tail = SAMPLE_SHAPE[layout]
+        want = "(T, " + ", ".join(str(n) for n in tail) + ")"
         single = arr.ndim == len(tail) + 1 and tuple(arr.shape[1:]) == tail
         if not single or arr.shape[0] < 2:
             batch = arr.ndim == len(tail) + 2 and tuple(arr.shape[2:]) == tail
