@@ -20,22 +20,19 @@ Run:  python scripts/bench_executable.py [--robot op3] [--limit N] [--tempo auto
 
 from __future__ import annotations
 
-import argparse
 import collections
 import sys
 import time
-import warnings
-from pathlib import Path
 
 import numpy as np
 
+from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.batch.work import expand_inputs
 from motion2robot.motion import read_motion
 from motion2robot.retarget import RetargetOptions, retarget
 from motion2robot.robot import load_robot
 from motion2robot.validate import CheckOptions, check
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 
 def kinematic_options() -> RetargetOptions:
@@ -78,17 +75,12 @@ def edge_only(report, frames: int) -> list[str]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--robot", default="op3")
-    ap.add_argument("--motions", default=str(SHARED))
-    ap.add_argument("--limit", type=int, default=None, help="first N clips only")
+    ap = clips_parser(__doc__)
     ap.add_argument("--tempo", default=None, help="tempo policy passed to retarget (default: the retargeter's)")
     ap.add_argument("--no-baseline", action="store_true", help="skip the kinematic-only comparison")
     ap.add_argument("--no-artefacts", action="store_true", help="skip the 100 fps resampling comparison")
-    ap.add_argument("--csv", default=None)
     args = ap.parse_args()
-    if not Path(args.motions).is_dir():
-        print(f"no motions folder at {args.motions}", file=sys.stderr)
+    if motions_missing(args.motions):
         return 2
     robot = load_robot(args.robot)
     items = list(expand_inputs([args.motions]).items)[: args.limit]
@@ -97,15 +89,7 @@ def main() -> int:
     retarget(read_motion(items[0].path, clip=items[0].clip)[0], robot, opts)  # compile outside the timing
     rows = []
     cpu_new = cpu_base = frames_total = 0.0
-    for item in items:
-        name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                human = read_motion(item.path, clip=item.clip)[0]
-        except Exception as err:  # noqa: BLE001 - unreadable clips are not part of the figure
-            print(f"  skip {name}: {str(err).splitlines()[0][:100]}")
-            continue
+    for name, human in readable_clips(args.motions, args.limit):
         c0 = time.process_time()
         try:
             motion = retarget(human, robot, opts)

@@ -22,22 +22,17 @@ Run:  python scripts/bench_project.py [--robot op3] [--limit N] [--rounds 6] [--
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
-import warnings
-from pathlib import Path
 
 import numpy as np
 
-from motion2robot.batch.work import expand_inputs
-from motion2robot.motion import read_motion
+from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.motion.human import SMPL22
 from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project, robot_points
 from motion2robot.retarget import retarget_and_check
 from motion2robot.robot import load_robot
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 
 def _verdict(ok: bool | None) -> str:
@@ -54,31 +49,17 @@ def keypoint_gap_mm(a, b, robot) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--robot", default="op3")
-    ap.add_argument("--motions", default=str(SHARED))
-    ap.add_argument("--limit", type=int, default=None, help="first N clips only")
+    ap = clips_parser(__doc__)
     ap.add_argument("--rounds", type=int, default=ROUNDS, help=f"correction rounds at most (default {ROUNDS})")
-    ap.add_argument("--csv", default=None)
     args = ap.parse_args()
-    if not Path(args.motions).is_dir():
-        print(f"no motions folder at {args.motions}", file=sys.stderr)
+    if motions_missing(args.motions):
         return 2
     robot = load_robot(args.robot)
-    items = list(expand_inputs([args.motions]).items)[: args.limit]
     rows = []
     print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'rnds':>4s} {'legs':>6s} "
           f"{'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
-    for item in items:
-        name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                human = read_motion(item.path, clip=item.clip)[0]
-        except Exception as err:  # noqa: BLE001 - unreadable clips are not part of the figure
-            print(f"  skip {name}: {str(err).splitlines()[0][:100]}")
-            continue
+    for name, human in readable_clips(args.motions, args.limit):
         t0 = time.perf_counter()
         try:
             p = project(human, robot, rounds=args.rounds)
