@@ -9,8 +9,8 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
 
 1. **time**: human frame i (at the human's rate f_h) is robot frame ``u_i = i * k * f_r / f_h``
    (k: the tempo factor the retargeter chose, ``meta["tempo"]``; f_r: the robot motion's rate);
-   the robot's keypoints are interpolated there (Catmull-Rom, as the tempo stretch itself does),
-   its contact labels taken at the nearest frame;
+   the robot's keypoints are interpolated there (natural cubic spline, as the tempo stretch
+   itself does), its contact labels taken at the nearest frame;
 2. **scale**: the robot's keypoints are the targets the retargeter would have had for a human
    whose pelvis path is scaled by ``legs`` and each bone by its group's ratio
    (:func:`~motion2robot.retarget.scale.scaled_keypoints`, ratios from ``meta["scale"]``). That

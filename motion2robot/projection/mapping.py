@@ -11,7 +11,7 @@ import numpy as np
 
 from motion2robot.errors import UserError
 from motion2robot.motion.human import KP, SMPL22, HumanMotion
-from motion2robot.motion.ops import catmull_rom
+from motion2robot.motion.ops import spline
 from motion2robot.projection.maths import fill_torso, robot_frames, unscale
 from motion2robot.retarget.scale import Scale
 from motion2robot.robot.robot import Robot
@@ -57,7 +57,7 @@ def project_motion(motion: RobotMotion, robot: Robot, original: HumanMotion) -> 
         raise UserError(f"{robot.name} has no pelvis keypoint: the projection rebuilds the skeleton from the pelvis")
     tempo = float(motion.meta.get("tempo") or 1.0)
     u = robot_frames(original.num_frames, original.fps, motion.fps, tempo, motion.num_frames)
-    pts, up = catmull_rom(pts, u), catmull_rom(up, u)
+    pts, up = spline(pts, u), spline(up, u)
     scale = _scale_of(motion)
     orig = np.asarray(original.positions)
     first = unscale(pts, mapped, scale, orig)  # the mapped joints do not depend on the fill's values
