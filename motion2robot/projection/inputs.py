@@ -12,7 +12,9 @@ from motion2robot.motion.human import HumanMotion
 
 
 #: Shape of one sample (after the frame axis) per layout of :mod:`~motion2robot.motion.tensors`.
-SAMPLE_SHAPE: dict[str, tuple[int, ...]] = {"humanml3d_joints": (22, 3), "humanml3d_vecs": (263,), "motionfix_207": (207,)}
+SAMPLE_SHAPE: dict[str, tuple[int, ...]] = {
+    "humanml3d_joints": (22, 3), "humanml3d_vecs": (263,), "motionfix_207": (207,),
+}
 
 
 class MotionArrayError(UserError, ValueError):
