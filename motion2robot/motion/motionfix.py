@@ -11,6 +11,23 @@ Decoding: Rz_0 = I, Rz_i = Rz_{i-1} D_i (its z part), R_i = Rz_i Rxy_i, t_0 = 0,
 t_i = t_{i-1} + R_{i-1} v_i, p = t_i + Rz_i p_rel. The first frame's heading and the offset
 between t and the pelvis are lost; the canonical frame (floor, heading, origin) removes both.
 
+Reference checked: github.com/athn-nik/motionfix (the MotionFix authors' code) at commit
+e681d40036156121507ff65629c9a46395a4191a, read, not copied. Matched: the group order
+(configs/data/motionfix.yaml ``load_feats``); each group's definition (src/data/motionfix.py
+``_get_body_transl_delta_pelv``: deltas in the previous frame's FULL pelvis rotation, first frame
+zero; ``_get_body_orient_xy`` / ``get_z_rot`` in src/tools/transforms3d.py: the heading is the Z
+angle of a ZYX Euler decomposition, so R = Rz Rxy; ``_get_z_orient_delta`` via ``rot_diff``:
+R_{i-1}^T R_i, identity first; ``_get_body_joints_local_wo_z_rot``: Rz^T (p - pelvis joint)); 6D =
+first two rows, Gram-Schmidt back (src/tools/geometry.py); the decoding in
+src/model/base_diffusion.py ``diffout2motion`` (Rz_0 = I, Rz_i = Rz_{i-1} D_i, t_i = t_{i-1} +
+R_{i-1} v_i); the statistics file deps/stats/statistics_motionfix.npy: a pickled dict of numpy
+arrays only, one {"mean", "std", "min", "max"} per group plus "body_transl" (read by
+:func:`load_stats`). Differences, none affecting joint positions after the canonical frame: their
+decoder starts t at the statistics' ``body_transl`` mean (here 0); it re-extracts the heading from
+the matrix product (here the heading angles are summed: the same for rotations about z).
+Their statistics show the conventions: mean ``body_orient_xy`` ~ Rx(90 deg) (SMPL's y-up body
+stood up in z-up AMASS), so in the heading frame the body faces -y with its left hip at +x.
+
 Models working in normalised space write (x - mean) / std per feature; the statistics file is a
 pickled dict read with the restricted unpickler: {"mean": (207,), "std": (207,)} or one
 {"mean", "std"} entry per group name.
