@@ -125,3 +125,25 @@ def test_a_hand_built_feature_sequence_decodes_to_hand_computed_joints() -> None
                                atol=1e-12)
     # head: straight above the pelvis whatever the heading (the tilt Rxy does not enter p_rel)
     np.testing.assert_allclose(p[:, 15], p[:, 0] + [0, 0, 0.5], atol=1e-12)
+
+
+@requires_shared
+@pytest.mark.parametrize("k, eps, word", [(2.0, 1e-5, "model's standardisation"), (1.0, 1e-5, "data module's")])
+def test_features_normalised_as_the_motionfix_code_does_decode_the_same(tmp_path: Path, k, eps, word) -> None:
+    """The statistics file in the layout of MotionFix's deps/stats/statistics_motionfix.npy (a dict
+    per group of float32 mean/std/min/max, plus body_transl; constant features have std 0), and
+    features normalised as its model ((x - mean) / (2 (std + 1e-5))) or data module do."""
+    src = _source("012314")
+    feat = encode(src.positions)
+    mean, std = feat.mean(axis=0), feat.std(axis=0)
+    std[np.abs(std) < 1e-9] = 0.0
+    assert (std == 0).any()  # e.g. the third entries of the heading deltas' rows
+    stats = {n: {"mean": mean[s].astype(np.float32), "std": std[s].astype(np.float32),
+                 "min": feat[:, s].min(0).astype(np.float32), "max": feat[:, s].max(0).astype(np.float32)}
+             for n, s in GROUPS}
+    stats["body_transl"] = {"mean": np.zeros(3, np.float32), "std": np.ones(3, np.float32)}
+    np.save(tmp_path / "statistics_motionfix.npy", np.array(stats, dtype=object), allow_pickle=True)
+    norm = _save(tmp_path / "out.npy", ((feat - mean) / (k * (std.astype(np.float32) + eps))).astype(np.float32))
+    m = read_motion(norm, stats=tmp_path / "statistics_motionfix.npy")[0]
+    assert np.linalg.norm(m.positions - src.positions, axis=-1).max() < 1e-3  # float32 statistics and file
+    assert word in m.meta["features"]

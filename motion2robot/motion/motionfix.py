@@ -28,9 +28,12 @@ the matrix product (here the heading angles are summed: the same for rotations a
 Their statistics show the conventions: mean ``body_orient_xy`` ~ Rx(90 deg) (SMPL's y-up body
 stood up in z-up AMASS), so in the heading frame the body faces -y with its left hip at +x.
 
-Models working in normalised space write (x - mean) / std per feature; the statistics file is a
-pickled dict read with the restricted unpickler: {"mean": (207,), "std": (207,)} or one
-{"mean", "std"} entry per group name.
+Models working in normalised space write normalised features; the MotionFix model's own output is
+(x - mean) / (2 (std + 1e-5)) (src/model/base.py ``norm``, "standardize"), its data module writes
+(x - mean) / (std + 1e-5), other code (x - mean) / std: :func:`raw_features` tries the three and
+keeps the one whose 6D rows come out orthonormal. The statistics file is a pickled dict read with
+the restricted unpickler: {"mean": (207,), "std": (207,)} or one {"mean", "std"} entry per group
+name (extra keys such as "min", "max", "body_transl" are ignored).
 """
 
 from __future__ import annotations
@@ -124,20 +127,40 @@ def load_stats(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return stats_arrays(path, obj)
 
 
+#: Denormalisations the MotionFix code uses, tried in this order (x: normalised; eps = 1e-5):
+#: the model's "standardize" (its diffusion output), the data module's "std", and plain mean/std.
+DENORMALISATIONS: tuple[tuple[str, float, float], ...] = (
+    ("x * 2 (std + 1e-5) + mean (the MotionFix model's standardisation)", 2.0, 1e-5),
+    ("x * (std + 1e-5) + mean (the MotionFix data module's)", 1.0, 1e-5),
+    ("x * std + mean", 1.0, 0.0),
+)
+
+
+def _orthonormal_residual(feat: np.ndarray) -> float:
+    rows = np.asarray(feat, dtype=np.float64)[..., _ROTATIONS].reshape(*np.shape(feat)[:-1], 23, 2, 3)
+    norms = np.abs(np.linalg.norm(rows, axis=-1) - 1.0).max()
+    dots = np.abs(np.sum(rows[..., 0, :] * rows[..., 1, :], axis=-1)).max()
+    return float(max(norms, dots))
+
+
 def raw_features(path: Path, feat: np.ndarray, stats: tuple[np.ndarray, np.ndarray] | None,
                  stats_name: str = "--stats") -> tuple[np.ndarray, str]:
-    """Raw features and a sentence saying what was assumed."""
+    """Raw features and a sentence saying what was assumed. Normalised input is denormalised with
+    each of :data:`DENORMALISATIONS`; the one whose 6D rows come out orthonormal (the smallest
+    residual) is used."""
     if looks_raw(feat):
         return feat, "raw (6D rotations orthonormal)" + ("; statistics not applied" if stats else "")
     if stats is None:
         raise fail(path, "looks like normalised 207-d features (its 6D rotation rows are not orthonormal) "
                          "and no statistics were given", "pass --stats STATS of the model (its mean/std dict)")
-    raw = feat * stats[1] + stats[0]
+    mean, std = stats
+    tries = [(feat * (k * (std + eps)) + mean, what) for what, k, eps in DENORMALISATIONS]
+    raw, what = min(tries, key=lambda t: _orthonormal_residual(t[0]))
     if not looks_raw(raw):
         raise fail(path, f"does not become raw features with the statistics of {stats_name} "
                          "(its 6D rotation rows are still not orthonormal)",
                    "give the statistics file of the model that wrote these features")
-    return raw, f"normalised, denormalised with {stats_name}"
+    return raw, f"normalised, denormalised with {stats_name} as {what}"
 
 
 def features_to_clips(path: Path, arr: np.ndarray, opts: ReadOptions,
