@@ -147,3 +147,12 @@ def test_features_normalised_as_the_motionfix_code_does_decode_the_same(tmp_path
     m = read_motion(norm, stats=tmp_path / "statistics_motionfix.npy")[0]
     assert np.linalg.norm(m.positions - src.positions, axis=-1).max() < 1e-3  # float32 statistics and file
     assert word in m.meta["features"]
+
+
+def test_zero_6d_rotations_are_one_line_exit_2_without_warnings(tmp_path: Path, capsys) -> None:
+    np.save(tmp_path / "zeros.npy", np.zeros((30, 135)))  # no rotation can be recovered from a zero 6D row
+    with __import__("warnings").catch_warnings():
+        __import__("warnings").simplefilter("error")  # a RuntimeWarning would print lines before the error
+        assert main(["inspect", str(tmp_path / "zeros.npy"), "--format", "smplh_135"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "NaN/inf" in err
