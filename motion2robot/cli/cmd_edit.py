@@ -1,7 +1,8 @@
 """``motion2robot edit SOURCE [EDITED]``: an edit pair on the robot, keeping what the edit did not change.
 
 Writes both robot motions (``<stem>_source_<robot>.npz``, ``<stem>_edited_<robot>.npz``), prints the
-diff (human parts changed, robot hinges changed, feasibility of both, what the edit broke or fixed)
+diff (human parts changed, robot hinges changed, where balance overrode the kept joints and why,
+feasibility of both, what the edit broke or fixed)
 and with ``--json`` writes it as JSON. Exit code 0 when the edited motion is feasible, 1 when not.
 """
 
@@ -24,8 +25,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "file holding both), compare them per body part and frame on the frames both have (the edit "
                     "resampled to the source's rate), retarget the source, and retarget the edit so that every "
                     "robot joint driven by an unedited part keeps exactly the source's trajectory, with a smooth "
-                    "blend of bounded length where the edit starts and ends. Prints which parts and joints "
-                    "changed and the feasibility of both. Exit 0 if the edit is feasible, 1 if not, 2 on error.")
+                    "blend of bounded length where the edit starts and ends. Where keeping those joints exactly "
+                    "makes the edit lose its balance or overload a joint (and the edit's own solution does not), "
+                    "balance overrides them in those frames only, and says where and why. Prints which parts "
+                    "and joints changed and the feasibility of both. Exit 0 if the edit is feasible, 1 if not, "
+                    "2 on error.")
     p.add_argument("source", help="source motion file, or an editor result file holding source and edit")
     p.add_argument("edited", nargs="?", help="edited motion file (omit for an editor result file)")
     p.add_argument("--robot", default="op3", help="robot name or config path (default: op3)")
