@@ -158,9 +158,10 @@ def test_balance_overrides_kept_joints_only_where_the_exact_composition_loses_it
     fails = set(check(exact.edited, robot, CheckOptions(physics=False)).checks["balance"]["frames"])
     assert set(ox["frame_list"]) <= fails  # the exact composition does lose its balance there
     assert check(exact.source, robot, CheckOptions(physics=False)).checks["balance"]["ok"]  # the source does not
-    # allowed: the same frames overridden, balance kept there, kept joints exact beyond them plus the blend
+    # allowed: those frames overridden (widened where the blend into them fails), balance kept there,
+    # kept joints exact beyond them plus the blend
     o = over.info["balance_override"]
-    assert o["applied"] and o["frame_list"] == ox["frame_list"] and {"l_knee", "root"} <= set(o["joints"])
+    assert o["applied"] and set(ox["frame_list"]) <= set(o["frame_list"]) and {"l_knee", "root"} <= set(o["joints"])
     after = set(check(over.edited, robot, CheckOptions(physics=False)).checks["balance"]["frames"])
     assert not after & set(o["frame_list"])
     blend, t = over.info["blend_frames"], over.source.num_frames

@@ -15,6 +15,7 @@ Frames are robot frames of the whole motion.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -23,6 +24,8 @@ from motion2robot.util.ranges import frame_ranges
 
 #: The checks balance may override kept joints for (the rest are the edit's own business).
 CHECKS = ("balance", "torque_limits")
+#: How many times the override may widen by the blend where the blend itself fails.
+WIDEN_STEPS = 3
 
 
 @dataclass(frozen=True)
@@ -69,23 +72,46 @@ def _why(name: str, c: dict, frames: list[int], lo: int, fps: float) -> list[str
     return out or [f"torque: a joint over its torque limit {where}"]
 
 
-def must_override(robot, src: RobotMotion, q_comp: np.ndarray, q_edit: np.ndarray,
-                  window: tuple[int, int]) -> OverrideNeed:
-    """The frames where balance must override the kept joints (see the module text)."""
+def must_override(robot, src: RobotMotion, q_comp: np.ndarray, q_edit: np.ndarray, window: tuple[int, int],
+                  compose_with: Callable[[list[int]], np.ndarray], blend: int,
+                  apply: bool = True) -> tuple[OverrideNeed, np.ndarray]:
+    """(the frames where balance must override the kept joints, the motion with them overridden:
+    ``compose_with(frames)``, or ``q_comp`` when none). See the module text; when the blend into
+    the override itself fails the checks (the switch falls where one foot carries the robot), the
+    override widens by the blend on that side, at most :data:`WIDEN_STEPS` times. ``apply=False``
+    (the override forbidden): the frames where it would start, and ``q_comp``."""
     checks = CHECKS if src.meta.get("balance", True) else ("torque_limits",)
     comp, comp_checks = _failing(robot, src, q_comp, window, checks)
     if not any(comp.values()):
-        return OverrideNeed([], [], [], {})
+        return OverrideNeed([], [], [], {}), q_comp
     own, _ = _failing(robot, src, src.qpos, window, checks)
     new = {c: comp[c] - own[c] for c in checks}  # failures the composition brought
+    failing = {c: sorted(f) for c, f in comp.items() if f}
     if not any(new.values()):
-        return OverrideNeed([], [], [], {c: sorted(f) for c, f in comp.items() if f})
+        return OverrideNeed([], [], [], failing), q_comp
     edit, _ = _failing(robot, src, q_edit, window, checks)
-    frames = sorted(set().union(*(new[c] - edit[c] for c in checks)))
+    frames = set().union(*(new[c] - edit[c] for c in checks))
     unresolved = sorted(set().union(*(new[c] & edit[c] for c in checks)))
     why = []
     for c in checks:
         mine = sorted(new[c] - edit[c])
         if mine:
             why += _why(c, comp_checks[c], mine, window[0], src.fps)
-    return OverrideNeed(frames, why, unresolved, {c: sorted(f) for c, f in comp.items() if f})
+    if not frames or not apply:
+        return OverrideNeed(sorted(frames), why, unresolved, failing), q_comp
+    first = set(frames)
+    q = compose_with(sorted(frames))
+    for _ in range(WIDEN_STEPS):
+        now, _ = _failing(robot, src, q, window, checks)
+        bad = set().union(*(now[c] - own[c] - edit[c] for c in checks))
+        if not bad:
+            break
+        grown = {f + d for f in bad for d in range(-blend, blend + 1)} & set(range(*window))
+        if grown <= frames:
+            break
+        frames |= grown
+        q = compose_with(sorted(frames))
+    if frames != first:
+        why.append(f"widened to frames {frame_ranges(sorted(frames), 4)}: the blend into the override failed "
+                   f"the same checks in frames {frame_ranges(sorted(frames - first), 4)}")
+    return OverrideNeed(sorted(frames), why, unresolved, failing), q

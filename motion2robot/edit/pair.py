@@ -150,11 +150,14 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
     q_comp, weights = compose(src.qpos, q_edit, changed, parts, blend)
     qpos, need = q_comp, None
     if window is not None and window[1] - window[0] >= 2:
-        need = must_override(robot, src, q_comp, q_edit, window)
-        if need.frames and balance_override:
+        def with_override(frames: list[int]) -> np.ndarray:
             must = np.zeros(t_r, bool)
-            must[need.frames] = True
-            qpos, weights = compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)
+            must[frames] = True
+            return compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)[0]
+
+        need, q_over = must_override(robot, src, q_comp, q_edit, window, with_override, blend, balance_override)
+        if need.frames and balance_override:
+            qpos = q_over
     elapsed = time.perf_counter() - t0
     human = {p: {"frames": frame_ranges(np.flatnonzero(c)), "max_m": float(dev[p][c].max()),
                  "frames_changed": int(c.sum())} for p, c in changed_h.items() if c.any()}
