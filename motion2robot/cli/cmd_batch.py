@@ -74,8 +74,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
-    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
-    from motion2robot.cli.check_options import check_option_kwargs
+    from motion2robot.batch import format_summary, plan_batch, read_rows, run_plan, summarize
 
     expansion = None
     if args.pairs:
@@ -101,13 +100,8 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     if plan.bad_lines:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
-    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
-    if args.tempo_cap is not None:
-        retarget += (("tempo_cap", args.tempo_cap),)
-    config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
-                         check_options=tuple(sorted(check_option_kwargs(args).items())),
-                         job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
+    config = batch_config(args, robot.name, read_options,
+                          job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:
@@ -122,3 +116,16 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     rows = [r for r in read_rows(args.out).rows if r["key"] in keys]
     print(format_summary(summarize(rows), robot=robot.name))
     return 0
+
+
+def batch_config(args: argparse.Namespace, robot: str, read_options: dict, job: str | None = None):  # noqa: ANN201
+    """The workers' BatchConfig from the parsed retarget, check and read options (batch, score)."""
+    from motion2robot.batch import BatchConfig
+    from motion2robot.cli.check_options import check_option_kwargs
+
+    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
+    if args.tempo_cap is not None:
+        retarget += (("tempo_cap", args.tempo_cap),)
+    return BatchConfig(robot=robot, physics=not args.no_physics, save_motions=getattr(args, "save_motions", None),
+                       read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
+                       check_options=tuple(sorted(check_option_kwargs(args).items())), job=job)
