@@ -121,8 +121,8 @@ def retarget_many(motions: Any, robot: str = "op3", *, fps: float | None = None,
 
     fps: the samples' frame rate (None: the layout's, 20 for HumanML3D); physics: judge with the
     physics playback; tempo, legs, tempo_cap, balance: as the CLI's ``--tempo`` etc.;
-    check_options: CheckOptions fields (thresholds); jobs: worker processes (None: one per core,
-    at most one per sample; 0: this process)."""
+    check_options: CheckOptions fields (thresholds); jobs: worker processes (None: one per core;
+    0: this process)."""
     config = _config(robot, physics, tempo, legs, tempo_cap, balance, check_options)
     t0 = time.perf_counter()
     clips = to_clips(motions, lengths=lengths, fps=fps, mean=mean, std=std)
@@ -135,8 +135,8 @@ def retarget_many(motions: Any, robot: str = "op3", *, fps: float | None = None,
             row = base_row(items[i], config)
             row["error"] = c
             out[i] = Sample(i, row, None)
-    if jobs is None:
-        jobs = max(1, min(os.cpu_count() or 1, len(good)))
+    if jobs is None:  # not capped by the batch size: the next call (maybe a bigger batch) reuses the pool
+        jobs = os.cpu_count() or 1
     if jobs < 0:
         raise MotionBatchError(f"jobs={jobs}: give 0 (this process) or more workers")
     for i, (row, motion) in zip(good, run_clips([items[i] for i in good], [clips[i] for i in good], config, jobs)):
