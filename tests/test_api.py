@@ -17,25 +17,7 @@ from motion2robot.robot_motion import RobotMotion
 from motion2robot.score.batch_input import to_clips, trailing_zero_frames
 from motion2robot.score.figures import TIMING
 from tests._shared import MOTIONS, requires_shared
-
-
-class FakeTensor:
-    """Quacks like a torch tensor on a GPU with grad: detach() -> cpu() -> numpy()."""
-
-    def __init__(self, a: np.ndarray):
-        self.a = a
-        self.calls: list[str] = []
-
-    def detach(self) -> "FakeTensor":
-        self.calls.append("detach")
-        return self
-
-    def cpu(self) -> "FakeTensor":
-        self.calls.append("cpu")
-        return self
-
-    def numpy(self) -> np.ndarray:
-        return self.a
+from tests.test_motion_read import _FakeTensor as FakeTensor  # the tests' duck-typed torch tensor
 
 
 def _joints() -> np.ndarray:

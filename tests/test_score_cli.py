@@ -130,22 +130,27 @@ def test_nan_sample_is_an_error_row_the_others_are_scored(tmp_path: Path, capsys
     assert "NaN" in bad["error"] and good["error"] is None and good["fidelity"]["keypoint_error_m"] > 0
 
 
-@pytest.mark.parametrize("args, words", [
-    (["--robot", "nosuchbot"], "nosuchbot"),
-    (["--out", "FILE"], "must be a folder"),
-    (["--jobs", "0"], "--jobs 0"),
-])
-def test_bad_input_one_line_exit_2(tmp_path: Path, args: list[str], words: str) -> None:
+def test_unknown_robot_one_line_exit_2(tmp_path: Path) -> None:
+    clip = tmp_path / "c.npy"
+    np.save(clip, np.zeros((5, 22, 3)))
+    r = subprocess.run([sys.executable, "-m", "motion2robot", "score", str(clip), "--robot", "nosuchbot",
+                        "--out", str(tmp_path / "o"), "-q"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("motion2robot: error: ") and "nosuchbot" in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("args, words", [(["--out", "FILE"], "must be a folder"), (["--jobs", "0"], "--jobs 0")])
+def test_bad_options_exit_2(tmp_path: Path, capsys, args: list[str], words: str) -> None:
     clip = tmp_path / "c.npy"
     np.save(clip, np.zeros((5, 22, 3)))
     (tmp_path / "FILE").write_text("x")
     args = [a.replace("FILE", str(tmp_path / "FILE")) for a in args]
     if "--out" not in args:
         args += ["--out", str(tmp_path / "o")]
-    r = subprocess.run([sys.executable, "-m", "motion2robot", "score", str(clip), *args, "-q"],
-                       capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2, r.stderr
-    assert r.stderr.count("\n") == 1 and r.stderr.startswith("motion2robot: error: ") and words in r.stderr
+    assert main(["score", str(clip), *args, "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("motion2robot: error: ") and words in err
 
 
 def test_duplicate_set_names_and_missing_input(tmp_path: Path, capsys) -> None:

@@ -4,8 +4,9 @@ can perform, one table row per INPUT."""
 from __future__ import annotations
 
 import argparse
-import os
 import sys
+
+from motion2robot.cli.worker_options import add_job_options, add_worker_options, batch_config, check_worker_args
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -21,47 +22,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("inputs", nargs="+", metavar="[NAME=]INPUT",
                    help="one set per INPUT: a folder, motion file or manifest (.txt: one path per line); NAME= labels "
                         "the set (default: the file or folder name)")
-    p.add_argument("--robot", default="op3", help="robot name (op3, menagerie:unitree_g1, ...) or config path (default: op3)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="folder for the per-set results files (batch JSONL, resumed) and the score files")
-    p.add_argument("--jobs", "-j", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
-    p.add_argument("--backend", choices=["local", "ray"], default="local",
-                   help="local process pool (default) or Ray tasks (pip install 'motion2robot[ray]')")
-    p.add_argument("--ray-address", help="join this Ray cluster instead of starting a local one")
-    p.add_argument("--no-physics", action="store_true",
-                   help="kinematic checks only (no physics playback): faster, and 'executable' means less")
+    add_worker_options(p)
     p.add_argument("--redo", action="store_true", help="process every sample again (their old rows are removed)")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    from motion2robot.cli.check_options import add_check_options
-    from motion2robot.cli.read_options import add_read_options
-    from motion2robot.cli.retarget_options import add_retarget_options
-
-    add_retarget_options(p)
-    add_check_options(p)
-    add_read_options(p)
+    add_job_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from motion2robot.cli.cmd_batch import batch_config
-    from motion2robot.cli.read_options import read_args_kwargs
-    from motion2robot.errors import UserError
-    from motion2robot.robot import load_robot
     from motion2robot.score.run import run_score, write_outputs
     from motion2robot.score.table import format_table
 
-    if args.jobs < 1:
-        raise UserError(f"--jobs {args.jobs}: give at least 1")
-    if args.ray_address and args.backend != "ray":
-        raise UserError("--ray-address needs --backend ray")
-    if args.backend == "ray":
-        from motion2robot.batch.ray_backend import import_ray
-
-        import_ray()
-    robot = load_robot(args.robot)  # exit 2 on an unknown robot before anything starts
-    read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    robot, read_options = check_worker_args(args)  # exit 2 on an unknown robot before anything starts
     config = batch_config(args, robot.name, read_options)
     bar = tqdm(total=0, unit="sample", desc="score", disable=args.quiet, file=sys.stderr, dynamic_ncols=True,
                smoothing=0.05)
