@@ -77,7 +77,7 @@ def test_two_sets_table_files_and_batch_report_figures(tmp_path: Path, capsys) -
     for name, f in figs.items():
         assert f["samples"] == f["executable"] + f["not_executable"] + f["errors"]
         assert f["fidelity_samples"] == f["samples"] - f["errors"]
-        assert 0 <= f["contact_agreement"] <= 1 and f["keypoint_error_cm"] > 0
+        assert 0 <= f["contact_agreement"] <= 1 and f["keypoint_error_cm"] > 0 and f["keypoint_error_pose_cm"] > 0
         # batch-report on the set's results file says the same
         assert main(["batch-report", str(out / f"{name}.jsonl"), "--json", "-"]) == 0
         report = json.loads(capsys.readouterr().out)

@@ -7,6 +7,7 @@ import pytest
 
 from motion2robot.batch.summary import summarize
 from motion2robot.score.fidelity import (
+    centred,
     contact_agreement,
     keypoint_error,
     robot_contacts,
@@ -36,6 +37,10 @@ def test_contacts_agreement_and_keypoint_error() -> None:
     b = a.copy()
     b[..., 2] = 0.02
     assert keypoint_error(a, b) == pytest.approx(0.02)
+    names = ("pelvis", "left_hip", "right_hip")
+    assert keypoint_error(centred(a, names), centred(b, names)) == 0.0  # a shifted skeleton: same pose
+    b[:, 1, 0] = 0.03
+    assert keypoint_error(centred(a, names), centred(b, names)) == pytest.approx(0.01)
 
 
 def _row(key: str, feasible: bool | None, tempo: float = 1.0, fallback: bool = False, error: str | None = None,
@@ -44,6 +49,7 @@ def _row(key: str, feasible: bool | None, tempo: float = 1.0, fallback: bool = F
             "failed_checks": list(failed), "reasons": [f"{c} fails in frames 1-3" for c in failed],
             "figures": {} if error else {"tempo": tempo, "fallback": {"mode": "stance"} if fallback else None},
             "fidelity": None if error else {"keypoint_error_m": kp, "keypoint_error_human_m": kp * 3,
+                                            "keypoint_error_pose_m": kp / 2,
                                             "contact_agreement": agree},
             "timings": {"total_s": 2.0, "cpu_s": None if error else 1.5}}
 
@@ -59,6 +65,7 @@ def test_set_figures_from_rows() -> None:
     assert (f.tempo_median, f.tempo_p90) == (1.5, pytest.approx(1.9))  # over the executable samples only
     assert f.slowed_share == pytest.approx(2 / 5) and f.fallback_share == pytest.approx(1 / 5)
     assert f.keypoint_error_cm == pytest.approx(100 * (0.05 * 3 + 0.15) / 4) and f.fidelity_samples == 4
+    assert f.keypoint_error_pose_cm == pytest.approx(f.keypoint_error_cm / 2)
     assert f.contact_agreement == pytest.approx((0.9 * 3 + 0.7) / 4)
     assert f.top_checks == (("balance", 1), ("rollout", 1)) and f.top_reason[1] == 1
     assert f.cpu_s_per_sample == 1.5 and f.samples_per_min_per_core == 40.0
@@ -84,6 +91,7 @@ def test_fidelity_of_a_real_clip_matches_the_solvers_residual() -> None:
     assert fid["keypoint_error_m"] == pytest.approx(solver, rel=1e-3, abs=1e-4)
     assert fid["keypoint_error_human_m"] == pytest.approx(fid["keypoint_error_m"] / motion.meta["scale"]["legs"], rel=1e-3)
     assert fid["contact_agreement"] > 0.95 and fid["contact_labels"] == "detected"
+    assert 0 < fid["keypoint_error_pose_m"] < 0.1
     slow = retarget(human, robot, RetargetOptions(tempo=2.0, legs="whole"))
     fid2 = fidelity(human, slow, robot)
     assert slow.num_frames == 2 * (human.num_frames - 1) + 1

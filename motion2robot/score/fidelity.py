@@ -7,7 +7,9 @@ Three figures per sample, all measured on the final robot motion (after the temp
   retargeter's own :func:`~motion2robot.retarget.scale.scaled_keypoints` with the scale it used),
   in robot metres and, divided by the legs ratio, in human metres. The human is the clip as given
   (played at the chosen tempo): with the ``stance`` fallback the error includes the legs the robot
-  did not perform.
+  did not perform and the path it did not walk. ``keypoint_error_pose_m`` is the same with both
+  skeletons' pelvis keypoints (or keypoint centroids) put together in every frame: the posture
+  alone, without the root's path.
 - **contact agreement**: share of (frame, foot) pairs where the robot's foot is in contact exactly
   when the human's is. Human labels: the clip's own (263-d features) or detected from foot height
   and speed (:func:`~motion2robot.retarget.contacts.contact_labels`), mapped onto the robot's frames
@@ -31,8 +33,8 @@ from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
 #: Keys of the ``fidelity`` dict of a result row.
-FIELDS = ("keypoint_error_m", "keypoint_error_human_m", "contact_agreement", "contact_frames_human",
-          "contact_frames_robot")
+FIELDS = ("keypoint_error_m", "keypoint_error_human_m", "keypoint_error_pose_m", "contact_agreement",
+          "contact_frames_human", "contact_frames_robot", "contact_labels")
 
 
 def robot_points(motion: RobotMotion, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
@@ -77,6 +79,12 @@ def keypoint_error(robot_kp: np.ndarray, human_kp: np.ndarray) -> float:
     return float(np.linalg.norm(robot_kp - human_kp, axis=-1).mean())
 
 
+def centred(kp: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """(T, K, 3) keypoints relative to the pelvis keypoint (or to their centroid without one)."""
+    centre = kp[:, [names.index("pelvis")]] if "pelvis" in names else kp.mean(axis=1, keepdims=True)
+    return kp - centre
+
+
 def contact_agreement(robot: np.ndarray, human: np.ndarray) -> float:
     """Share (0-1) of (frame, foot) pairs where the (T, 2) bool labels agree."""
     return float(np.mean(np.asarray(robot, dtype=bool) == np.asarray(human, dtype=bool)))
@@ -107,12 +115,14 @@ def fidelity(human: HumanMotion, motion: RobotMotion, robot: Robot, *, fps: floa
     T = min(len(kp_r), played.num_frames)  # equal unless the motion was cut after the retarget
     target = scaled_keypoints(played.positions[:T], scale)[:, [KP[k] for k in robot.keypoints]]
     err = keypoint_error(kp_r[:T], target)
+    pose = keypoint_error(centred(kp_r[:T], robot.keypoints), centred(target, robot.keypoints))
     labels, source = contact_labels(human)
     human_c = labels[tempo_index(motion.num_frames, human.num_frames, factor)]
     robot_c = robot_contacts(corners, motion.fps, contact_height, contact_speed)
     return {
         "keypoint_error_m": round(err, 5),
         "keypoint_error_human_m": round(err / scale.legs, 5),
+        "keypoint_error_pose_m": round(pose, 5),
         "contact_agreement": round(contact_agreement(robot_c, human_c), 5),
         "contact_frames_human": int(human_c.sum()),
         "contact_frames_robot": int(robot_c.sum()),

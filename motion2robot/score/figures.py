@@ -26,7 +26,8 @@ class SetFigures:
     """One row of the score table. Shares are fractions of ``samples`` (errors count as not
     executable, as in ``batch-report``); tempo figures are over the executable samples (the
     slow-down they needed; 1.0 = as generated); fidelity means are over the samples solved
-    (``fidelity_samples``); ``trajectory_error_m``: mean root error of the samples with a requested
+    (``fidelity_samples``), keypoint errors in robot cm (``_human_cm``: at human scale; ``_pose_cm``:
+    pelvis on pelvis, the posture without the path); ``trajectory_error_m``: mean root error of the samples with a requested
     path (``trajectory_samples``), robot metres; ``top_checks``: (check, samples) most failed
     first; ``top_reason``: the most common reason among the samples not executable, with its
     sample count."""
@@ -44,6 +45,7 @@ class SetFigures:
     fallback_share: float | None
     keypoint_error_cm: float | None
     keypoint_error_human_cm: float | None
+    keypoint_error_pose_cm: float | None
     contact_agreement: float | None
     fidelity_samples: int
     trajectory_error_m: float | None
@@ -90,6 +92,7 @@ def set_figures(name: str, rows: Sequence[dict[str, Any]], summary: Summary | No
         fallback_share=_r(fallback / n) if n else None,
         keypoint_error_cm=_mean([100 * f["keypoint_error_m"] for f in fid], 2),
         keypoint_error_human_cm=_mean([100 * f["keypoint_error_human_m"] for f in fid], 2),
+        keypoint_error_pose_cm=_mean([100 * f["keypoint_error_pose_m"] for f in fid if "keypoint_error_pose_m" in f], 2),
         contact_agreement=_mean([f["contact_agreement"] for f in fid]),
         fidelity_samples=len(fid),
         trajectory_error_m=s.control["mean_error_m"] if s.control else None,

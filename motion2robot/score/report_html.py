@@ -54,7 +54,10 @@ def plot_tempo(tempos: dict[str, list[float]]) -> Figure:
     ax.set_xlabel("tempo factor (x1 = as generated; higher = slowed)")
     ax.set_ylabel("executable samples (%)")
     ax.set_ylim(0, 102)
-    ax.legend(fontsize=8)
+    if any(tempos.values()):
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no executable samples", transform=ax.transAxes, ha="center")
     ax.grid(alpha=0.3)
     return fig
 

@@ -37,7 +37,7 @@ COLUMNS: tuple[tuple[str, Callable[[SetFigures], str]], ...] = (
     ("executable", lambda f: f"{_pct(f.executable_share)} ({f.executable})"),
     ("tempo median / p90", _tempo),
     ("fallback", lambda f: _pct(f.fallback_share)),
-    ("keypoint error", lambda f: _num(f.keypoint_error_cm, ".1f", " cm")),
+    ("keypoint error path / pose", lambda f: f"{_num(f.keypoint_error_cm, '.1f')} / {_num(f.keypoint_error_pose_cm, '.1f')} cm"),
     ("contact agreement", lambda f: _pct(f.contact_agreement)),
     ("trajectory error", _trajectory),
     ("errors", lambda f: str(f.errors)),
@@ -67,7 +67,8 @@ def format_table(figures: Sequence[SetFigures], robot: str) -> str:
 def legend(robot: str) -> str:
     return (f"executable: passes every check on {robot}, physics playback included unless --no-physics; tempo: "
             "slow-down the executable samples needed (x1.00 = as generated); fallback: legs in a fixed stance; "
-            "keypoint error: robot vs the human scaled to the robot, mean over frames and keypoints; contact "
+            "keypoint error: robot vs the human scaled to the robot, mean over frames and keypoints, in the world "
+            "(path) and pelvis on pelvis (pose); contact "
             "agreement: (frame, foot) pairs where the robot's foot contact matches the human's labels")
 
 
