@@ -40,7 +40,7 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 def kinematic_options() -> RetargetOptions:
     """The pipeline as it was before the executability stages: kinematic retargeting only."""
-    return RetargetOptions(tempo="human", legs="whole", dynamic_balance=False)
+    return RetargetOptions(tempo="human", legs="whole", dynamic_balance=False, lift_feet=False)
 
 
 def default_options(tempo: str | None) -> RetargetOptions:
