@@ -185,3 +185,18 @@ def test_killed_run_loses_nothing(tmp_path: Path) -> None:
     rows = results.read_text().splitlines()
     assert rows[:len(kept)] == kept and len(rows) == 3
     assert sorted(json.loads(x)["clip"] for x in rows) == [0, 1, 2]
+
+
+@requires_shared
+def test_trajectory_error_where_a_path_was_requested(tmp_path: Path, capsys) -> None:
+    """A clip with a requested root path (--trajectory: here its own pelvis path on the ground,
+    x and z of the y-up file) gets the trajectory error column; clips without one show '-'."""
+    raw = np.load(MOTIONS / "humanml3d_joints/M010968.npy")[:40]
+    np.save(tmp_path / "clip.npy", raw)
+    np.savetxt(tmp_path / "path.csv", raw[:, 0, [0, 2]], delimiter=",")
+    code, stdout, err = _score(capsys, f"ctl={tmp_path / 'clip.npy'}", "--trajectory", str(tmp_path / "path.csv"),
+                               "--out", str(tmp_path / "o"), *FAST)
+    assert code == 0, err
+    f = _figures(tmp_path / "o")["ctl"]
+    assert f["trajectory_samples"] == 1 and 0 <= f["trajectory_error_m"] < 0.05
+    assert f"{100 * f['trajectory_error_m']:.1f} cm (1)" in stdout.splitlines()[3]
