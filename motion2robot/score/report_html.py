@@ -35,9 +35,12 @@ def plot_executable(figures: Sequence[SetFigures]) -> Figure:
         share = np.array([get(f) / f.samples if f.samples else 0.0 for f in figures][::-1])
         ax.barh(names, 100 * share, left=100 * left, color=color, label=label)
         left += share
+    for y, f in enumerate(figures[::-1]):
+        if f.executable_share is not None:
+            ax.text(1, y, f"{100 * f.executable_share:.1f}% executable", va="center", fontsize=8)
     ax.set_xlim(0, 100)
     ax.set_xlabel("share of samples (%)")
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     return fig
 
 
