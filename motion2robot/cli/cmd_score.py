@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     if result.processed:
         print(f"score: processed {result.processed} samples in {result.wall_s:.1f} s wall with {args.jobs} workers "
               f"({60 * result.processed / result.wall_s:.1f} samples/min)", file=sys.stderr)
+    paths = write_outputs(result, args.out)  # before printing: a closed stdout (| head) must not lose them
     print(format_table(result.figures, robot.name))
-    paths = write_outputs(result, args.out)
     print("wrote " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0
