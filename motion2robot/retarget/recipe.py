@@ -38,8 +38,10 @@ _PACKAGE = Path(__file__).resolve().parent.parent
 
 
 def graph_sources() -> list[Path]:
-    """The source files hashed into the digest: :data:`GRAPH_MODULES` and ``robot/*.py``."""
-    return [_PACKAGE / m for m in GRAPH_MODULES] + sorted((_PACKAGE / "robot").glob("*.py"))
+    """The source files hashed into the digest: :data:`GRAPH_MODULES`, the cost terms
+    (``retarget/terms/*.py``) and ``robot/*.py``."""
+    return ([_PACKAGE / m for m in GRAPH_MODULES] + sorted((_PACKAGE / "retarget" / "terms").glob("*.py"))
+            + sorted((_PACKAGE / "robot").glob("*.py")))
 
 
 def _feed(h, x) -> None:
