@@ -136,16 +136,69 @@ def test_batch_of_pairs_summarises_the_edits_that_stay_executable(tmp_path: Path
 
 
 @requires_shared
-def test_balance_override_only_where_the_composition_loses_balance(source, robot) -> None:
+def test_balance_overrides_kept_joints_only_where_the_exact_composition_loses_it(robot) -> None:
+    from motion2robot.retarget import RetargetOptions
+    from motion2robot.validate import CheckOptions, check
+
+    src = read_motion(MOTIONS / "humanml3d_joints" / "M010968.npy")[0]  # standing still (BMLmovi)
+    leg = [KP["right_knee"], KP["right_ankle"], KP["right_foot"]]
+    p = _rotate(src.positions, leg, KP["right_hip"], _bump(src.num_frames, 15, 55, 0.9), axis=1)  # knee raised
+    edit = HumanMotion(p, src.fps, meta=dict(src.meta))
+    opts = RetargetOptions(tempo="human", legs="whole")
+    exact = retarget_edit(src, edit, robot, opts, balance_override=False)
+    over = retarget_edit(src, edit, robot, opts)
+    parts = hinge_parts(robot)
+    kept = np.array([h for h, ps in enumerate(parts) if "right_leg" not in ps])
+    assert len(kept) == len(parts) - 6 and set(exact.human) == {"right_leg"}
+    # forbidden: every kept joint and the root exactly the source's, and the need reported with its reason
+    q_x, q_s = exact.edited.qpos, exact.source.qpos
+    assert np.abs(q_x[:, 7 + kept] - q_s[:, 7 + kept]).max() <= 1e-6 and np.abs(q_x[:, :7] - q_s[:, :7]).max() <= 1e-6
+    ox = exact.info["balance_override"]
+    assert not ox["applied"] and ox["frame_list"] and ox["why"][0].startswith("balance: the ZMP leaves")
+    fails = set(check(exact.edited, robot, CheckOptions(physics=False)).checks["balance"]["frames"])
+    assert set(ox["frame_list"]) <= fails  # the exact composition does lose its balance there
+    assert check(exact.source, robot, CheckOptions(physics=False)).checks["balance"]["ok"]  # the source does not
+    # allowed: those frames overridden (widened where the blend into them fails), balance kept there,
+    # kept joints exact beyond them plus the blend
+    o = over.info["balance_override"]
+    assert o["applied"] and set(ox["frame_list"]) <= set(o["frame_list"]) and {"l_knee", "root"} <= set(o["joints"])
+    after = set(check(over.edited, robot, CheckOptions(physics=False)).checks["balance"]["frames"])
+    assert not after & set(o["frame_list"])
+    blend, t = over.info["blend_frames"], over.source.num_frames
+    far = np.abs(np.arange(t)[:, None] - np.array(o["frame_list"])[None]).min(axis=1) > blend
+    q_o = over.edited.qpos
+    assert far.sum() > 10 and np.abs(q_o[far][:, 7 + kept] - q_s[far][:, 7 + kept]).max() <= 1e-6
+    assert np.abs(q_o[far, :7] - q_s[far, :7]).max() <= 1e-6
+
+
+@requires_shared
+def test_no_override_where_the_exact_composition_keeps_its_balance(source, robot) -> None:
     arm = [KP["right_elbow"], KP["right_wrist"]]
     p = _rotate(source.positions, arm, KP["right_shoulder"], _bump(source.num_frames, 40, 80, 0.8), axis=0)
     edit = HumanMotion(p, source.fps, meta=dict(source.meta))
-    plain = retarget_edit(source, edit, robot)
-    over = retarget_edit(source, edit, robot, balance_override=True)
-    frames = over.info["balance_override_frames"]
-    d = np.abs(over.edited.qpos - plain.edited.qpos).max(axis=1)
-    if frames is None:  # nothing to override: the same motion
-        assert d.max() == 0.0
-    else:  # only inside the retargeted window (plus nothing outside it)
-        lo, hi = over.info["retargeted_window"]
-        assert d[:lo].max(initial=0) == 0.0 and d[hi:].max(initial=0) == 0.0
+    allowed = retarget_edit(source, edit, robot)
+    exact = retarget_edit(source, edit, robot, balance_override=False)
+    assert allowed.info["balance_override"] is None and exact.info["balance_override"] is None
+    assert np.array_equal(allowed.edited.qpos, exact.edited.qpos)  # nothing overridden: the exact composition
+
+
+@requires_shared
+def test_edit_cli_reports_the_override_in_text_json_and_html(tmp_path: Path, capsys) -> None:
+    src = read_motion(MOTIONS / "humanml3d_joints" / "M010968.npy")[0]
+    leg = [KP["right_knee"], KP["right_ankle"], KP["right_foot"]]
+    p = _rotate(src.positions, leg, KP["right_hip"], _bump(src.num_frames, 15, 55, 0.9), axis=1)
+    z2y = lambda a: np.stack([a[..., 1], a[..., 2], a[..., 0]], axis=-1)
+    np.save(tmp_path / "src.npy", z2y(src.positions))
+    np.save(tmp_path / "knee.npy", z2y(p))
+    args = ["edit", str(tmp_path / "src.npy"), str(tmp_path / "knee.npy"), "--no-physics", "--tempo", "human",
+            "--legs", "whole"]
+    main(args + ["--json", str(tmp_path / "d.json"), "--html", str(tmp_path / "r.html")])
+    out = capsys.readouterr().out
+    assert "balance overrode the unchanged joints in frames" in out and "the ZMP leaves the support polygon" in out
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["balance_override"]["applied"] and "l_knee" in doc["balance_override"]["joints"]
+    assert "balance overrode the unchanged joints" in (tmp_path / "r.html").read_text()
+    assert main(args + ["--no-balance-override"]) == 1  # forbidden: infeasible, with the reason
+    out = capsys.readouterr().out
+    assert "the edit is infeasible in frames" in out and "--no-balance-override forbids" in out
+    assert "14 of 20 joints and the root equal the source's robot motion in every frame" in out

@@ -99,3 +99,50 @@ def test_a_slowed_tempo_stretches_the_requested_path(tmp_path: Path) -> None:
     legs = motion.meta["scale"]["legs"]
     np.testing.assert_allclose(xy[0], np.array(human.meta["control_path"][0][:2]) * legs, atol=1e-12)
     np.testing.assert_allclose(xy[-1], np.array(human.meta["control_path"][-1][:2]) * legs, atol=1e-12)
+
+
+def test_the_path_follows_the_output_rate_by_time() -> None:
+    from motion2robot.retarget.control_path import on_robot_frames
+
+    path = [[0.1 * i, -0.05 * i, None] for i in range(170)]  # 20 fps: x = 2 m/s * t, y = -1 m/s * t
+    path[50] = None  # one uncontrolled human frame
+    frames = on_robot_frames(path, 254, 30.0, 20.0)  # retarget --fps 30: floor(169 * 1.5) + 1 frames
+    assert len(frames) == 254
+    t = np.arange(254) / 30.0
+    near = np.abs(t * 20.0 - 50) < 1.0  # robot frames interpolated from human frame 50
+    assert all(frames[r] is None for r in np.flatnonzero(near))
+    got = np.array([f for r, f in enumerate(frames) if not near[r]])
+    np.testing.assert_allclose(got, np.stack([2.0 * t, -1.0 * t], axis=1)[~near], atol=1e-12)
+    slow = on_robot_frames(path, 253 * 2 + 1, 30.0, 20.0, tempo=2.0)  # and slowed x2 on top
+    np.testing.assert_allclose(slow[2 * 30], [2.0, -1.0], atol=1e-12)  # robot 2 s = human 1 s
+
+
+@requires_shared
+def test_retarget_at_another_rate_keeps_the_requested_path(tmp_path: Path, capsys) -> None:
+    from motion2robot.robot_motion import RobotMotion
+
+    raw = _raw()
+    np.save(tmp_path / "m.npy", raw)
+    np.save(tmp_path / "path.npy", raw[:, 0, [0, 2]])  # the pelvis's own ground path
+    out = tmp_path / "r30.npz"
+    assert main(["retarget", str(tmp_path / "m.npy"), "--trajectory", str(tmp_path / "path.npy"), "--fps", "30",
+                 "--tempo", "human", "--legs", "whole", "-o", str(out)]) == 0
+    motion = RobotMotion.load(out)
+    assert motion.fps == 30.0 and motion.num_frames == int(169 * 1.5) + 1
+    xy = np.array(motion.meta["control_xy"], dtype=float)
+    assert xy.shape == (motion.num_frames, 2)  # every output frame controlled
+    human = read_motion(tmp_path / "m.npy", trajectory=tmp_path / "path.npy")[0]
+    path = np.array([p[:2] for p in human.meta["control_path"]], dtype=float)
+    u = np.arange(motion.num_frames) / 30.0 * 20.0  # by time, not by frame count
+    expected = np.stack([np.interp(u, np.arange(len(path)), path[:, k]) for k in (0, 1)], axis=1)
+    np.testing.assert_allclose(xy, expected * motion.meta["scale"]["legs"], atol=1e-9)
+    from motion2robot.robot import load_robot
+    from motion2robot.validate import CheckOptions, check
+
+    c = check(motion, load_robot("op3"), CheckOptions(physics=False)).checks["trajectory"]
+    assert c["control_frames"] == motion.num_frames
+    assert c["control_mean_error_m"] == pytest.approx(c["mean_error_m"], abs=1e-3)  # the path is the pelvis's
+    capsys.readouterr()
+    assert main(["check", str(out), "--no-physics"]) in (0, 1)
+    text = capsys.readouterr().out
+    assert "requested trajectory (--trajectory path.npy)" in text

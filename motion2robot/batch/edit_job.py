@@ -58,7 +58,8 @@ class EditJob(FeasibilityJob):
         row["edit"] = {"source_feasible": bool(rep_src.feasible), "human_parts_changed": sorted(result.human),
                        "robot_joints_changed": sorted(result.robot),
                        "breaks": [r for r in rep.reasons if r not in rep_src.reasons],
-                       "fixes": [r for r in rep_src.reasons if r not in rep.reasons]}
+                       "fixes": [r for r in rep_src.reasons if r not in rep.reasons],
+                       "balance_override": result.info.get("balance_override")}
         if config.save_motions:
             from pathlib import Path
 

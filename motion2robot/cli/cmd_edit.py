@@ -1,7 +1,8 @@
 """``motion2robot edit SOURCE [EDITED]``: an edit pair on the robot, keeping what the edit did not change.
 
 Writes both robot motions (``<stem>_source_<robot>.npz``, ``<stem>_edited_<robot>.npz``), prints the
-diff (human parts changed, robot hinges changed, feasibility of both, what the edit broke or fixed)
+diff (human parts changed, robot hinges changed, where balance overrode the kept joints and why,
+feasibility of both, what the edit broke or fixed)
 and with ``--json`` writes it as JSON. Exit code 0 when the edited motion is feasible, 1 when not.
 """
 
@@ -13,6 +14,7 @@ import math
 from pathlib import Path
 
 from motion2robot.cli.read_options import add_read_options, read_args_kwargs
+from motion2robot.cli.retarget_options import add_retarget_options, retarget_options_from
 from motion2robot.errors import InputFileError, UserError
 
 
@@ -23,8 +25,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "file holding both), compare them per body part and frame on the frames both have (the edit "
                     "resampled to the source's rate), retarget the source, and retarget the edit so that every "
                     "robot joint driven by an unedited part keeps exactly the source's trajectory, with a smooth "
-                    "blend of bounded length where the edit starts and ends. Prints which parts and joints "
-                    "changed and the feasibility of both. Exit 0 if the edit is feasible, 1 if not, 2 on error.")
+                    "blend of bounded length where the edit starts and ends. Where keeping those joints exactly "
+                    "makes the edit lose its balance or overload a joint (and the edit's own solution does not), "
+                    "balance overrides them in those frames only, and says where and why. Prints which parts "
+                    "and joints changed and the feasibility of both. Exit 0 if the edit is feasible, 1 if not, "
+                    "2 on error.")
     p.add_argument("source", help="source motion file, or an editor result file holding source and edit")
     p.add_argument("edited", nargs="?", help="edited motion file (omit for an editor result file)")
     p.add_argument("--robot", default="op3", help="robot name or config path (default: op3)")
@@ -39,11 +44,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--html", metavar="REPORT.html",
                    help="write the edited motion's HTML report with the diff against the source")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
-    p.add_argument("--balance-override", action="store_true",
-                   help="let balance override the kept joints in frames where the composed motion loses its "
-                        "balance while the source's and the edit's own motions keep it (reported)")
-    p.add_argument("--no-balance", dest="balance", action="store_false",
-                   help="do not keep the CoM over the support polygon (running, jumping)")
+    p.add_argument("--no-balance-override", dest="balance_override", action="store_false",
+                   help="keep the unchanged joints exactly the source's even where the composed edit then loses its "
+                        "balance or overloads a joint (the edit is then reported infeasible there, with the reason); "
+                        "by default balance overrides them in those frames only, and says so")
+    add_retarget_options(p)
     add_read_options(p)
     p.set_defaults(func=run)
 
@@ -70,6 +75,27 @@ def _pair(args: argparse.Namespace):
     return roles["source"], roles["edited"], Path(args.source)
 
 
+def override_lines(o: dict | None) -> list[str]:
+    """What the balance override did (or, forbidden, would have had to do), and why."""
+    if not o:
+        return []
+    out = []
+    if o["frames"]:
+        why = "; ".join(o["why"])
+        if o["applied"]:
+            joints = ", ".join(f"{j} ({f})" for j, f in o["joints"].items()) or "none"
+            out.append(f"balance overrode the unchanged joints in frames {o['frames']}: keeping them exactly the "
+                       f"source's fails there ({why}); the edit's own solution is used there, blended. "
+                       f"Joints moved off the source's: {joints}")
+        else:
+            out.append(f"the edit is infeasible in frames {o['frames']} with the unchanged joints kept exactly the "
+                       f"source's ({why}); --no-balance-override forbids the override that would fix it")
+    if o.get("unresolved_frames"):
+        out.append(f"the edit fails balance or torque in frames {o['unresolved_frames']} whatever the unchanged "
+                   "joints do (its own solution fails there too)")
+    return out
+
+
 def diff_text(result, rep_src, rep_edit) -> str:
     lines = []
     if not result.human:
@@ -82,9 +108,7 @@ def diff_text(result, rep_src, rep_edit) -> str:
     same = [j for j in result.source.joint_names if j not in result.robot]
     lines.append(f"robot: {len(same)} of {len(result.source.joint_names)} joints"
                  f"{'' if 'root' in result.robot else ' and the root'} equal the source's robot motion in every frame")
-    if result.info.get("balance_override_frames"):
-        lines.append(f"balance overrode the source's joints in frames {result.info['balance_override_frames']} "
-                     "(the composed motion lost its balance there; the edit's own solution is used)")
+    lines += override_lines(result.info.get("balance_override"))
     lines.append(f"feasible: source {'yes' if rep_src.feasible else 'no'}, edit {'yes' if rep_edit.feasible else 'no'}")
     for r in rep_edit.reasons:
         if r not in rep_src.reasons:
@@ -99,7 +123,6 @@ def run(args: argparse.Namespace) -> int:
     from motion2robot.edit import retarget_edit
     from motion2robot.edit.pair import BLEND_SECONDS
     from motion2robot.edit.parts import TOLERANCE
-    from motion2robot.retarget import RetargetOptions
     from motion2robot.robot import load_robot
     from motion2robot.validate import CheckOptions, check
 
@@ -108,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"{name} {v}: give a non-negative number")
     robot = load_robot(args.robot)
     source, edited, where = _pair(args)
-    result = retarget_edit(source, edited, robot, RetargetOptions(balance=args.balance),
+    result = retarget_edit(source, edited, robot, retarget_options_from(args),
                            tolerance=TOLERANCE if args.tolerance is None else args.tolerance,
                            blend_seconds=BLEND_SECONDS if args.blend is None else args.blend,
                            balance_override=args.balance_override,
@@ -120,12 +143,15 @@ def run(args: argparse.Namespace) -> int:
              result.edited.save(out_dir / f"{where.stem}_edited_{tag}.npz")]
     opts = CheckOptions(physics=args.physics)
     rep_src, rep_edit = check(result.source, robot, opts), check(result.edited, robot, opts)
+    forbidden = bool((result.info.get("balance_override") or {}).get("frames")) and not args.balance_override
     print(diff_text(result, rep_src, rep_edit))
     print("robot motions written to " + ", ".join(str(p) for p in paths))
     if args.json:
         from motion2robot.util.jsonable import plain
 
         doc = {"human_parts_changed": result.human, "robot_joints_changed": result.robot, "info": result.info,
+               "balance_override": result.info.get("balance_override"),
+               "edit_executable": bool(rep_edit.feasible and not forbidden),
                "source_report": rep_src.to_dict(), "edit_report": rep_edit.to_dict(),
                "breaks": [r for r in rep_edit.reasons if r not in rep_src.reasons],
                "fixes": [r for r in rep_src.reasons if r not in rep_edit.reasons]}
@@ -140,4 +166,4 @@ def run(args: argparse.Namespace) -> int:
         path = write_html_report(rep_edit, result.edited, robot, args.html, human=edited,
                                  sections=[("Edit against the source", body)])
         print(f"HTML report written to {path}")
-    return 0 if rep_edit.feasible else 1
+    return 0 if rep_edit.feasible and not forbidden else 1

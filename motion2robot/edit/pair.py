@@ -4,13 +4,15 @@ robot trajectory for every hinge whose body parts it did not change.
 The two human motions are compared on the frames both have, after resampling the edit to the
 source's rate (editors may change either). The source is retargeted as usual (its tempo and legs
 policies choose a slow-down and whole body or stance); the edit then with the source's scale, tempo
-and legs fixed, so both robot motions have the same frames; the two are composed per hinge
-(:mod:`~motion2robot.edit.compose`), the human frames' changes mapped onto the robot's frames.
-Nothing is re-solved after the composition. With ``balance_override``, balance may override the kept joints where it must: in
-the retargeted window, frames where the composed motion fails the (kinematic) balance check while
-both the source's and the edit's own robot motions pass it take every hinge and the root from the
-edit (with the same blend), and are reported. It is off by default: three more kinematic checks
-of the window cost about as much as the edit's retargeting, and kept joints then stay exact.
+and legs fixed, only over the frames it changed plus the blend and a margin
+(:mod:`~motion2robot.edit.window`); the two are composed per hinge
+(:mod:`~motion2robot.edit.compose`), the human frames' changes mapped onto the robot's frames by
+time. Kept joints are first exactly the source's. Where that composition fails the balance or
+torque check while the source's and the edit's own motions pass (:mod:`~motion2robot.edit.override`),
+balance overrides the kept joints in those frames only (every hinge and the root take the edit's
+own solution there, with the same blend), and the frames, joints and reasons are reported; with
+``balance_override=False`` the kept joints stay exact and the need is reported instead (the edit
+is then infeasible there).
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ from typing import Any
 import numpy as np
 
 from motion2robot.edit.compose import compose
+from motion2robot.edit.override import OverrideNeed, must_override
 from motion2robot.edit.parts import PARTS, TOLERANCE, hinge_parts, part_deviation
+from motion2robot.edit.window import edit_solution, human_frames
 from motion2robot.errors import InputFileError
 from motion2robot.motion.human import SMPL22_PARENTS, HumanMotion
 from motion2robot.motion.ops import resample, trim
@@ -31,6 +35,8 @@ from motion2robot.util.ranges import frame_ranges
 
 #: Seconds of blend between the source's and the edit's trajectory at each end of an edit.
 BLEND_SECONDS = 0.25
+#: Seconds of the edit's solution beyond the blend (its trimmed solve's edge effects fall there).
+MARGIN_SECONDS = 0.3
 #: Mean relative bone-length difference above which two motions are different bodies.
 SKELETON_TOLERANCE = 0.15
 #: A robot hinge differs from the source's where it moved by more than this (rad).
@@ -85,49 +91,45 @@ def _fixed_like(opts, src: RobotMotion):
     return replace(opts, **changes)
 
 
-def _same_frames(q: np.ndarray, t: int) -> np.ndarray:
-    """(T', nq) -> (t, nq) by linear interpolation (quaternions renormalised); q itself if T' == t."""
-    if len(q) == t:
-        return q
-    u = np.linspace(0, len(q) - 1, t)
-    out = np.stack([np.interp(u, np.arange(len(q)), q[:, k]) for k in range(q.shape[1])], axis=1)
-    out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
+def _moved(q: np.ndarray, ref: np.ndarray, names) -> dict[str, dict[str, Any]]:
+    """{hinge or "root": {"frames", "max_rad", "frames_changed"}} where ``q`` differs from ``ref``."""
+    out = {}
+    for h, jn in enumerate(names):
+        d = np.abs(q[:, 7 + h] - ref[:, 7 + h])
+        moved = np.flatnonzero(d > HINGE_EPS)
+        if moved.size:
+            out[jn] = {"frames": frame_ranges(moved), "max_rad": float(d.max()), "frames_changed": int(moved.size)}
+    root = np.abs(q[:, :7] - ref[:, :7]).max(axis=1)
+    if (root > HINGE_EPS).any():
+        out["root"] = {"frames": frame_ranges(np.flatnonzero(root > HINGE_EPS)), "max_rad": float(root.max()),
+                       "frames_changed": int((root > HINGE_EPS).sum())}
     return out
 
 
-def _balance_must_override(robot, src: RobotMotion, q_comp: np.ndarray, q_edit: np.ndarray,
-                           window: tuple[int, int]) -> list[int]:
-    """Frames of the window where the composed motion fails the balance check and neither the
-    source's nor the edit's own robot motion does (kinematic checks on the window's frames, so the
-    three share the window's edge effects)."""
-    from motion2robot.validate import CheckOptions, check
-
-    if not src.meta.get("balance", True):
-        return []
-    lo, hi = window
-    opts = CheckOptions(physics=False)
-
-    def failing(q: np.ndarray) -> set[int]:
-        m = RobotMotion(q[lo:hi], src.fps, src.joint_names, src.robot, {})
-        return {lo + int(f) for f in check(m, robot, opts).checks.get("balance", {}).get("frames", [])}
-
-    bad = failing(q_comp)
-    if bad:
-        bad -= failing(src.qpos)
-    return sorted(bad - failing(q_edit)) if bad else []
+def _override_info(need: OverrideNeed | None, allowed: bool, q_final: np.ndarray, q_comp: np.ndarray,
+                   names) -> dict[str, Any] | None:
+    """The report of the balance override: None when nothing needed it."""
+    if need is None or not (need.frames or need.unresolved):
+        return None
+    return {"allowed": allowed, "applied": bool(allowed and need.frames),
+            "frames": frame_ranges(need.frames) if need.frames else None, "frame_list": list(need.frames),
+            "why": list(need.why),
+            "joints": {j: d["frames"] for j, d in _moved(q_final, q_comp, names).items()} if allowed else {},
+            "unresolved_frames": frame_ranges(need.unresolved) if need.unresolved else None}
 
 
 def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *,
                   tolerance: float = TOLERANCE, blend_seconds: float = BLEND_SECONDS,
-                  balance_override: bool = False, name: str = "the pair") -> EditResult:
-    """Retarget a (source, edit) pair; see the module docstring."""
+                  balance_override: bool = True, name: str = "the pair") -> EditResult:
+    """Retarget a (source, edit) pair; see the module docstring. ``balance_override=False``
+    forbids the override (kept joints exact; the need is still reported)."""
     from motion2robot.retarget import RetargetOptions, retarget
     from motion2robot.retarget.scale import auto_scale
 
     source, edit = common_frames(source, edit, name)
     t0 = time.perf_counter()
     dev = part_deviation(source, edit)
-    changed = {p: d > tolerance for p, d in dev.items()}
+    changed_h = {p: d > tolerance for p, d in dev.items()}
     opts = options or RetargetOptions()
     if opts.scale is None:
         opts = replace(opts, scale=auto_scale(source, robot))
@@ -135,40 +137,37 @@ def retarget_edit(source: HumanMotion, edit: HumanMotion, robot, options=None, *
     t_src = time.perf_counter() - t0
     blend = int(round(blend_seconds * src.fps))
     t_r = src.num_frames
-    to_human = np.rint(np.arange(t_r) * (source.num_frames - 1) / max(t_r - 1, 1)).astype(int)
-    changed = {p: c[to_human] for p, c in changed.items()}  # on the robot's frames (tempo may stretch)
-    q_edit = src.qpos.copy()
-    window = None
-    if np.any(list(changed.values())):
-        window = (0, t_r)
-        q_edit = _same_frames(retarget(edit, robot, _fixed_like(opts, src)).qpos, t_r)
+    tempo = float(src.meta.get("tempo", 1.0) or 1.0)
+    to_human = np.clip(np.rint(human_frames(np.arange(t_r), src.fps, tempo, source.fps)), 0,
+                       source.num_frames - 1).astype(int)
+    changed = {p: c[to_human] for p, c in changed_h.items()}  # on the robot's frames (tempo, --fps)
+    any_h = np.any(list(changed_h.values()), axis=0)
+    q_edit, window = src.qpos.copy(), None
+    if any_h.any():
+        q_edit, window = edit_solution(edit, robot, _fixed_like(opts, src), src, any_h, blend_seconds + MARGIN_SECONDS)
+    t_edit = time.perf_counter() - t0 - t_src
     parts = hinge_parts(robot)
-    qpos, weights = compose(src.qpos, q_edit, changed, parts, blend)
-    overridden: list[int] = []
-    if window is not None and balance_override:
-        overridden = _balance_must_override(robot, src, qpos, q_edit, window)  # type: ignore[arg-type]
-        if overridden:
-            must = np.zeros(source.num_frames, bool)
-            must[overridden] = True
-            qpos, weights = compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)
+    q_comp, weights = compose(src.qpos, q_edit, changed, parts, blend)
+    qpos, need = q_comp, None
+    if window is not None and window[1] - window[0] >= 2:
+        def with_override(frames: list[int]) -> np.ndarray:
+            must = np.zeros(t_r, bool)
+            must[frames] = True
+            return compose(src.qpos, q_edit, {p: c | must for p, c in changed.items()}, parts, blend)[0]
+
+        need, q_over = must_override(robot, src, q_comp, q_edit, window, with_override, blend, balance_override)
+        if need.frames and balance_override:
+            qpos = q_over
     elapsed = time.perf_counter() - t0
     human = {p: {"frames": frame_ranges(np.flatnonzero(c)), "max_m": float(dev[p][c].max()),
-                 "frames_changed": int(c.sum())} for p, c in ((p, dev[p] > tolerance) for p in dev) if c.any()}
-    robot_diff = {}
-    for h, jn in enumerate(robot.joint_names):
-        d = np.abs(qpos[:, 7 + h] - src.qpos[:, 7 + h])
-        moved = np.flatnonzero(d > HINGE_EPS)
-        if moved.size:
-            robot_diff[jn] = {"frames": frame_ranges(moved), "max_rad": float(d.max()), "frames_changed": int(moved.size)}
-    root = np.abs(qpos[:, :7] - src.qpos[:, :7]).max(axis=1)
-    if (root > HINGE_EPS).any():
-        robot_diff["root"] = {"frames": frame_ranges(np.flatnonzero(root > HINGE_EPS)),
-                              "max_rad": float(root.max()), "frames_changed": int((root > HINGE_EPS).sum())}
+                 "frames_changed": int(c.sum())} for p, c in changed_h.items() if c.any()}
+    robot_diff = _moved(qpos, src.qpos, robot.joint_names)
+    override = _override_info(need, balance_override, qpos, q_comp, robot.joint_names)
     info = {"tolerance_m": tolerance, "blend_frames": blend, "retargeted_window": window,
-            "tempo": src.meta.get("tempo", 1.0), "robot_frames": t_r,
-            "balance_override_frames": frame_ranges(overridden) if overridden else None,
+            "tempo": tempo, "robot_frames": t_r, "balance_override": override,
+            "balance_override_frames": override["frames"] if override and override["applied"] else None,
             "frames": source.num_frames, "fps": source.fps, "parts": list(PARTS),
-            "seconds": {"source": round(t_src, 3), "total": round(elapsed, 3)}}
+            "seconds": {"source": round(t_src, 3), "edit": round(t_edit, 3), "total": round(elapsed, 3)}}
     edited = RobotMotion(qpos, src.fps, src.joint_names, src.robot,
                          {**dict(src.meta), **{k: v for k, v in edit.meta.items() if k in ("source", "prompt", "clip")},
                           "edit": {"human_parts_changed": sorted(human), "source_weight_min": float(weights.min()),

@@ -11,9 +11,29 @@ Decoding: Rz_0 = I, Rz_i = Rz_{i-1} D_i (its z part), R_i = Rz_i Rxy_i, t_0 = 0,
 t_i = t_{i-1} + R_{i-1} v_i, p = t_i + Rz_i p_rel. The first frame's heading and the offset
 between t and the pelvis are lost; the canonical frame (floor, heading, origin) removes both.
 
-Models working in normalised space write (x - mean) / std per feature; the statistics file is a
-pickled dict read with the restricted unpickler: {"mean": (207,), "std": (207,)} or one
-{"mean", "std"} entry per group name.
+Reference checked: github.com/athn-nik/motionfix (the MotionFix authors' code) at commit
+e681d40036156121507ff65629c9a46395a4191a, read, not copied. Matched: the group order
+(configs/data/motionfix.yaml ``load_feats``); each group's definition (src/data/motionfix.py
+``_get_body_transl_delta_pelv``: deltas in the previous frame's FULL pelvis rotation, first frame
+zero; ``_get_body_orient_xy`` / ``get_z_rot`` in src/tools/transforms3d.py: the heading is the Z
+angle of a ZYX Euler decomposition, so R = Rz Rxy; ``_get_z_orient_delta`` via ``rot_diff``:
+R_{i-1}^T R_i, identity first; ``_get_body_joints_local_wo_z_rot``: Rz^T (p - pelvis joint)); 6D =
+first two rows, Gram-Schmidt back (src/tools/geometry.py); the decoding in
+src/model/base_diffusion.py ``diffout2motion`` (Rz_0 = I, Rz_i = Rz_{i-1} D_i, t_i = t_{i-1} +
+R_{i-1} v_i); the statistics file deps/stats/statistics_motionfix.npy: a pickled dict of numpy
+arrays only, one {"mean", "std", "min", "max"} per group plus "body_transl" (read by
+:func:`load_stats`). Differences, none affecting joint positions after the canonical frame: their
+decoder starts t at the statistics' ``body_transl`` mean (here 0); it re-extracts the heading from
+the matrix product (here the heading angles are summed: the same for rotations about z).
+Their statistics show the conventions: mean ``body_orient_xy`` ~ Rx(90 deg) (SMPL's y-up body
+stood up in z-up AMASS), so in the heading frame the body faces -y with its left hip at +x.
+
+Models working in normalised space write normalised features; the MotionFix model's own output is
+(x - mean) / (2 (std + 1e-5)) (src/model/base.py ``norm``, "standardize"), its data module writes
+(x - mean) / (std + 1e-5), other code (x - mean) / std: :func:`raw_features` tries the three and
+keeps the one whose 6D rows come out orthonormal. The statistics file is a pickled dict read with
+the restricted unpickler: {"mean": (207,), "std": (207,)} or one {"mean", "std"} entry per group
+name (extra keys such as "min", "max", "body_transl" are ignored).
 """
 
 from __future__ import annotations
@@ -107,20 +127,40 @@ def load_stats(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return stats_arrays(path, obj)
 
 
+#: Denormalisations the MotionFix code uses, tried in this order (x: normalised; eps = 1e-5):
+#: the model's "standardize" (its diffusion output), the data module's "std", and plain mean/std.
+DENORMALISATIONS: tuple[tuple[str, float, float], ...] = (
+    ("x * 2 (std + 1e-5) + mean (the MotionFix model's standardisation)", 2.0, 1e-5),
+    ("x * (std + 1e-5) + mean (the MotionFix data module's)", 1.0, 1e-5),
+    ("x * std + mean", 1.0, 0.0),
+)
+
+
+def _orthonormal_residual(feat: np.ndarray) -> float:
+    rows = np.asarray(feat, dtype=np.float64)[..., _ROTATIONS].reshape(*np.shape(feat)[:-1], 23, 2, 3)
+    norms = np.abs(np.linalg.norm(rows, axis=-1) - 1.0).max()
+    dots = np.abs(np.sum(rows[..., 0, :] * rows[..., 1, :], axis=-1)).max()
+    return float(max(norms, dots))
+
+
 def raw_features(path: Path, feat: np.ndarray, stats: tuple[np.ndarray, np.ndarray] | None,
                  stats_name: str = "--stats") -> tuple[np.ndarray, str]:
-    """Raw features and a sentence saying what was assumed."""
+    """Raw features and a sentence saying what was assumed. Normalised input is denormalised with
+    each of :data:`DENORMALISATIONS`; the one whose 6D rows come out orthonormal (the smallest
+    residual) is used."""
     if looks_raw(feat):
         return feat, "raw (6D rotations orthonormal)" + ("; statistics not applied" if stats else "")
     if stats is None:
         raise fail(path, "looks like normalised 207-d features (its 6D rotation rows are not orthonormal) "
                          "and no statistics were given", "pass --stats STATS of the model (its mean/std dict)")
-    raw = feat * stats[1] + stats[0]
+    mean, std = stats
+    tries = [(feat * (k * (std + eps)) + mean, what) for what, k, eps in DENORMALISATIONS]
+    raw, what = min(tries, key=lambda t: _orthonormal_residual(t[0]))
     if not looks_raw(raw):
         raise fail(path, f"does not become raw features with the statistics of {stats_name} "
                          "(its 6D rotation rows are still not orthonormal)",
                    "give the statistics file of the model that wrote these features")
-    return raw, f"normalised, denormalised with {stats_name}"
+    return raw, f"normalised, denormalised with {stats_name} as {what}"
 
 
 def features_to_clips(path: Path, arr: np.ndarray, opts: ReadOptions,

@@ -15,9 +15,10 @@ def matrix_from_6d(d6: np.ndarray) -> np.ndarray:
     """(..., 6) -> (..., 3, 3): rows r1 = a/|a|, r2 = b minus its r1 part, normalised, r3 = r1 x r2."""
     d6 = np.asarray(d6, dtype=np.float64)
     a, b = d6[..., :3], d6[..., 3:6]
-    r1 = a / np.linalg.norm(a, axis=-1, keepdims=True)
-    b = b - np.sum(r1 * b, axis=-1, keepdims=True) * r1
-    r2 = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a zero row gives NaN, which the readers refuse
+        r1 = a / np.linalg.norm(a, axis=-1, keepdims=True)
+        b = b - np.sum(r1 * b, axis=-1, keepdims=True) * r1
+        r2 = b / np.linalg.norm(b, axis=-1, keepdims=True)
     return np.stack([r1, r2, np.cross(r1, r2)], axis=-2)
 
 

@@ -115,6 +115,10 @@ def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarra
     smooth = smooth_configuration(setup, Q)
     Q, _ = correct(setup.problem, plan.params(setup), smooth, robot.lower, robot.upper, setup.max_step, 1,
                    extra=EXTRA_CORRECTIONS)
-    Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], free_limbs(robot), setup.fps)
-    Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
-    return Q
+    spread = Q.copy()
+    spread[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], free_limbs(robot), setup.fps)
+    # where pushes of opposite signs met, the spread can undo a frame's own: that frame keeps its push
+    worse = setup.points(spread)[3].min(axis=1, initial=0.0) < setup.points(Q)[3].min(axis=1, initial=0.0) - REPAIR_TOLERANCE
+    spread[worse] = Q[worse]
+    spread[:, 7:] = np.clip(clamp_velocity(spread[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
+    return spread
