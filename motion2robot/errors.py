@@ -32,3 +32,8 @@ class SolverError(UserError):
 class InputWarning(UserWarning):
     """Input was read, but with an assumption the user should know (one line, shown by the CLI as
     ``motion2robot: warning: ...``)."""
+
+
+class MotionBatchError(UserError, ValueError):
+    """Arrays or tensors given to the in-process API (:mod:`motion2robot.api`) cannot be taken as a
+    batch of motions: wrong shape, padding without ``lengths``, lengths that do not fit."""

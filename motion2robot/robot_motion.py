@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import zipfile
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -52,6 +52,11 @@ class RobotMotion:
         object.__setattr__(self, "joint_names", names)
         object.__setattr__(self, "fps", float(self.fps))
         object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
+
+    def __reduce__(self) -> tuple:
+        """Pickle support (worker processes): the fields in order, ``meta`` as a plain dict."""
+        return type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
+                                 for v in (getattr(self, f.name) for f in fields(self)))
 
     @property
     def num_frames(self) -> int:

@@ -23,7 +23,9 @@ Row schema (one JSON object per line; every key always present, ``null`` when un
 - ``robot``, ``version``: robot name and motion2robot version; ``motion_file``: the saved robot
   motion (``--save-motions``) or null; ``worker``: ``{"pid", "max_rss_mb"}`` the worker process and
   its peak resident memory so far; ``warnings``: distinct one-line Python warnings raised while
-  processing the clip (at most 5).
+  processing the clip (at most 5); ``fidelity``: null, or the robot motion's fidelity to the human
+  (:mod:`motion2robot.score.fidelity`: ``keypoint_error_m``, ``keypoint_error_human_m``,
+  ``contact_agreement``, ... or ``{"error": ...}``).
 """
 
 from motion2robot.batch.results import ReadResult, ResultWriter, read_rows

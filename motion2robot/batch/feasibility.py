@@ -1,4 +1,4 @@
-"""The batch job run on every clip: read -> retarget -> check (-> save the robot motion).
+"""The batch job run on every clip: read -> retarget -> check -> fidelity (-> save the robot motion).
 
 A *job* is an object with ``setup(config) -> state`` (once per worker process: load the robot,
 compile its casadi functions) and ``run(item, state, row, stage) -> None`` (fill one result row;
@@ -64,19 +64,29 @@ class FeasibilityJob:
     @staticmethod
     def run(item: WorkItem, state: FeasibilityState, row: dict[str, Any], stage: list[str], config: Any) -> None:
         from motion2robot.motion import read_motion
-        from motion2robot.retarget import retarget_and_check
-        from motion2robot.validate import check
 
-        t = row["timings"]
         stage[0] = "read"
         t0 = time.perf_counter()
         clips = read_motion(item.path, clip=item.clip, **dict(config.read_options))
         if len(clips) != 1:
             raise ValueError(f"expected one clip, the reader returned {len(clips)}")
-        human = clips[0]
+        row["timings"]["read_s"] = round(time.perf_counter() - t0, 4)
+        motion = FeasibilityJob.evaluate(clips[0], state, row, stage)
+        if config.save_motions:
+            stage[0] = "save"
+            out = Path(config.save_motions) / motion_file_name(item)
+            row["motion_file"] = str(motion.with_(meta={"feasible": bool(row["feasible"])}).save(out))
+
+    @staticmethod
+    def evaluate(human: Any, state: FeasibilityState, row: dict[str, Any], stage: list[str]) -> Any:
+        """Retarget and check one clip already in memory, filling ``row`` (clip figures, verdict,
+        timings, ``fidelity``); returns the robot motion."""
+        from motion2robot.retarget import retarget_and_check
+        from motion2robot.validate import check
+
+        t = row["timings"]
         row.update(frames=human.num_frames, fps=human.fps, duration_s=round(human.duration, 4),
                    prompt=human.meta.get("prompt"))
-        t["read_s"] = round(time.perf_counter() - t0, 4)
         stage[0] = "retarget"
         t0 = time.perf_counter()
         # the tempo/legs policy judges its attempts with these check options: its report is reused
@@ -97,7 +107,20 @@ class FeasibilityJob:
         control = {k: v for k, v in report.checks.get("trajectory", {}).items() if k.startswith("control_")}
         if control:
             row["control"] = control
-        if config.save_motions:
-            stage[0] = "save"
-            out = Path(config.save_motions) / motion_file_name(item)
-            row["motion_file"] = str(motion.with_(meta={"feasible": bool(report.feasible)}).save(out))
+        stage[0] = "fidelity"
+        row["fidelity"] = _fidelity(human, motion, state)
+        return motion
+
+
+def _fidelity(human: Any, motion: Any, state: FeasibilityState) -> dict[str, Any]:
+    """:func:`~motion2robot.score.fidelity.fidelity` of the clip; a failure there is kept as
+    ``{"error": ...}`` (the verdict stands)."""
+    from motion2robot.batch.work import one_line
+    from motion2robot.score.fidelity import fidelity
+
+    try:
+        return fidelity(human, motion, state.robot, fps=state.retarget_options.fps,
+                        contact_height=state.check_options.contact_height,
+                        contact_speed=state.check_options.contact_speed)
+    except Exception as err:  # noqa: BLE001 - a figure missing, not a lost clip
+        return {"error": one_line(err)}

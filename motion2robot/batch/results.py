@@ -8,7 +8,7 @@ it off before appending, so the file always parses and that clip is simply done 
 Row schema: see :mod:`motion2robot.batch` (all keys always present):
 ``key, path, clip, frames, fps, duration_s, prompt, feasible, failed_checks, reasons, figures,
 timings {read_s, retarget_s, check_s, total_s, cpu_s}, error, robot, version, motion_file,
-worker {pid, max_rss_mb}, warnings``.
+worker {pid, max_rss_mb}, warnings, fidelity``.
 """
 
 from __future__ import annotations

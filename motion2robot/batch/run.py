@@ -68,33 +68,45 @@ def run_plan(plan: BatchPlan, config: BatchConfig, *, backend: str = "local", jo
     Files that could not be counted get their error row from the driver. Returns rows written."""
     if backend not in BACKENDS:
         raise UserError(f"unknown backend {backend!r}; use one of: {', '.join(BACKENDS)}")
-    uncountable = [i for i in plan.todo if i.clip is None]
-    work = [i for i in plan.todo if i.clip is not None]
-    written = 0
     with ResultWriter(plan.out) as writer:
-        for item in uncountable:
-            row = base_row(item, config)
-            row["error"] = f"read: {plan.expansion.count_errors.get(item.path, 'cannot read the file')}"
+        def write(row: dict) -> None:
             writer.write(row)
-            written += 1
             if on_row:
                 on_row(row)
-        if not work:
-            return written
-        if backend == "ray":
-            from motion2robot.batch.ray_backend import run_ray
 
-            rows = run_ray(work, config, jobs, address=ray_address)
-        else:
-            from motion2robot.batch.local import run_local
+        return run_items(plan.todo, plan.expansion.count_errors, config, write, backend=backend, jobs=jobs,
+                         ray_address=ray_address, max_tasks_per_child=max_tasks_per_child)
 
-            rows = run_local(work, config, jobs, max_tasks_per_child=max_tasks_per_child)
-        try:
-            for row in rows:
-                writer.write(row)
-                written += 1
-                if on_row:
-                    on_row(row)
-        finally:
-            rows.close()
+
+def run_items(items: Sequence[WorkItem], count_errors: Mapping[str, str], config: BatchConfig,
+              write: Callable[[dict], None], *, backend: str = "local", jobs: int = 2,
+              ray_address: str | None = None, max_tasks_per_child: int | None = None) -> int:
+    """Process ``items`` through a backend, calling ``write(row)`` for each row as it arrives (the
+    caller appends it to its results file(s)); items of uncountable files (``clip`` None) get
+    their error row (``count_errors[path]``) from the driver. Returns rows written."""
+    if backend not in BACKENDS:
+        raise UserError(f"unknown backend {backend!r}; use one of: {', '.join(BACKENDS)}")
+    written = 0
+    for item in (i for i in items if i.clip is None):
+        row = base_row(item, config)
+        row["error"] = f"read: {count_errors.get(item.path, 'cannot read the file')}"
+        write(row)
+        written += 1
+    work = [i for i in items if i.clip is not None]
+    if not work:
+        return written
+    if backend == "ray":
+        from motion2robot.batch.ray_backend import run_ray
+
+        rows = run_ray(work, config, jobs, address=ray_address)
+    else:
+        from motion2robot.batch.local import run_local
+
+        rows = run_local(work, config, jobs, max_tasks_per_child=max_tasks_per_child)
+    try:
+        for row in rows:
+            write(row)
+            written += 1
+    finally:
+        rows.close()
     return written

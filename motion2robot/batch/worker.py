@@ -107,7 +107,7 @@ def base_row(item: WorkItem, config: BatchConfig) -> dict[str, Any]:
         "feasible": None, "failed_checks": [], "reasons": [], "figures": {},
         "timings": {"read_s": None, "retarget_s": None, "check_s": None, "total_s": None, "cpu_s": None},
         "error": None, "robot": config.robot, "version": __version__, "motion_file": None,
-        "worker": None, "warnings": [],
+        "worker": None, "warnings": [], "fidelity": None,
     }
 
 
@@ -121,6 +121,21 @@ def worker_figures() -> dict[str, Any]:
 def process(item: WorkItem) -> dict[str, Any]:
     """One row for one clip; never raises (an exception becomes ``"<stage>: <message>"`` in the
     row's ``error``). Needs :func:`initialize` to have run in this process."""
+    return _process(item, lambda state, row, stage, config: _STATE.job.run(item, state, row, stage, config))
+
+
+def process_clip(item: WorkItem, human: Any) -> tuple[dict[str, Any], Any]:
+    """(row, robot motion or None) of a clip already in memory (the in-process API): the job's
+    ``evaluate`` instead of read + ``run``; never raises, like :func:`process`."""
+    out: dict[str, Any] = {}
+
+    def body(state: Any, row: dict[str, Any], stage: list[str], config: BatchConfig) -> None:
+        out["motion"] = _STATE.job.evaluate(human, state, row, stage)
+
+    return _process(item, body), out.get("motion")
+
+
+def _process(item: WorkItem, body: Any) -> dict[str, Any]:
     config = _STATE.config
     if config is None:
         raise RuntimeError("initialize() has not run in this process")
@@ -133,7 +148,7 @@ def process(item: WorkItem) -> dict[str, Any]:
         with warnings.catch_warnings(record=True) as caught:  # into the row, not over the progress bar
             warnings.simplefilter("always")
             try:
-                _STATE.job.run(item, _STATE.state, row, stage, config)
+                body(_STATE.state, row, stage, config)
             except Exception as err:  # noqa: BLE001 - the row carries the problem, the batch goes on
                 row["error"] = f"{stage[0]}: {one_line(err)}"
         row["warnings"] = list(dict.fromkeys(

@@ -31,7 +31,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
         _default_showwarning(message, category, filename, lineno, file, line)
 
 #: Order in which subcommands appear in ``--help`` (others follow alphabetically).
-_ORDER = ["demo", "robots", "inspect", "retarget", "edit", "check", "sim", "stream", "servos", "batch", "batch-report"]
+_ORDER = ["demo", "robots", "inspect", "retarget", "edit", "check", "sim", "stream", "servos", "batch", "batch-report", "score"]
 
 
 def _command_modules() -> list[str]:

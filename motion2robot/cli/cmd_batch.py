@@ -6,6 +6,8 @@ import argparse
 import os
 import sys
 
+from motion2robot.cli.worker_options import add_job_options, add_worker_options, batch_config, check_worker_args
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
@@ -17,17 +19,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="motion files, folders (searched recursively for .npy .npz .bvh .pt .pth .pkl .amc) "
                         "or manifests (.txt/.lst: one path per line, relative to the manifest)")
-    p.add_argument("--robot", default="op3", help="robot name (op3, menagerie:unitree_g1, ...) or config path "
-                                                  "(default: op3)")
     p.add_argument("--out", required=True, help="results file (JSON Lines); appended to and resumed")
-    p.add_argument("--jobs", "-j", type=int, default=os.cpu_count() or 1,
-                   help="worker processes / Ray CPUs (default: all cores)")
-    p.add_argument("--backend", choices=["local", "ray"], default="local",
-                   help="local process pool (default) or Ray tasks (pip install 'motion2robot[ray]')")
-    p.add_argument("--ray-address", help="join this Ray cluster (e.g. auto, ray://host:10001) instead of "
-                                         "starting a local one")
-    p.add_argument("--no-physics", action="store_true",
-                   help="kinematic checks only (skip the MuJoCo rollout): much faster")
+    add_worker_options(p)
     p.add_argument("--save-motions", metavar="DIR", help="also save each retargeted robot motion (.npz) here")
     p.add_argument("--redo", action="store_true", help="process every clip again (their old rows are removed)")
     p.add_argument("--redo-errors", action="store_true", help="process again the clips whose row is an error")
@@ -37,45 +30,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="INPUTS are edit pairs (editor result files, folders of them, or manifests of SOURCE<TAB>EDIT "
                         "lines): each edit is retargeted keeping what it did not change (see 'edit'); the summary "
                         "gives the share of edits that stay executable")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    from motion2robot.cli.check_options import add_check_options
-    from motion2robot.cli.read_options import add_read_options
-    from motion2robot.cli.retarget_options import add_retarget_options
-
-    add_retarget_options(p)
-    add_check_options(p)
-    add_read_options(p)
+    add_job_options(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from motion2robot.cli.read_options import read_args_kwargs
-    from motion2robot.errors import UserError
-    from motion2robot.robot import load_robot
-
-    if args.jobs < 1:
-        raise UserError(f"--jobs {args.jobs}: give at least 1")
-    if args.ray_address and args.backend != "ray":
-        raise UserError("--ray-address needs --backend ray")
-    if args.backend == "ray":
-        from motion2robot.batch.ray_backend import import_ray
-
-        import_ray()
     from motion2robot.batch.results import batch_lock
     from motion2robot.util.output import output_path
 
     output_path(args.out, "results file")
-    robot = load_robot(args.robot)  # fail fast (exit 2) on an unknown robot, before any worker starts
-    read_options = {k: v for k, v in read_args_kwargs(args).items() if v is not None}
+    robot, read_options = check_worker_args(args)  # fail fast (exit 2) on an unknown robot
     with batch_lock(args.out):  # before the plan reads or --redo rewrites the results file
         return _run_locked(args, robot, read_options, tqdm)
 
 
 def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> int:  # noqa: ANN001
-    from motion2robot.batch import BatchConfig, format_summary, plan_batch, read_rows, run_plan, summarize
-    from motion2robot.cli.check_options import check_option_kwargs
+    from motion2robot.batch import format_summary, plan_batch, read_rows, run_plan, summarize
 
     expansion = None
     if args.pairs:
@@ -101,13 +73,8 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     if plan.bad_lines:
         note.append(f"{len(plan.bad_lines)} unreadable line(s) in {args.out} ignored (torn write after a crash)")
     print("batch: " + "; ".join(note) + f"; {len(plan.todo)} to do", file=sys.stderr)
-    retarget = (("tempo", args.tempo), ("legs", args.legs), ("balance", args.balance))
-    if args.tempo_cap is not None:
-        retarget += (("tempo_cap", args.tempo_cap),)
-    config = BatchConfig(robot=robot.name, physics=not args.no_physics, save_motions=args.save_motions,
-                         read_options=tuple(sorted(read_options.items())), retarget_options=retarget,
-                         check_options=tuple(sorted(check_option_kwargs(args).items())),
-                         job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
+    config = batch_config(args, robot.name, read_options,
+                          job="motion2robot.batch.edit_job:EditJob" if args.pairs else None)
     counts = {"ok": 0, "no": 0, "err": 0}
     with tqdm(total=len(plan.todo), unit="clip", desc="batch", disable=args.quiet, file=sys.stderr,
               dynamic_ncols=True, smoothing=0.05) as bar:
@@ -122,3 +89,4 @@ def _run_locked(args: argparse.Namespace, robot, read_options: dict, tqdm) -> in
     rows = [r for r in read_rows(args.out).rows if r["key"] in keys]
     print(format_summary(summarize(rows), robot=robot.name))
     return 0
+

@@ -6,7 +6,7 @@ floor at z = 0**. Keypoints: the 22 SMPL body joints in HumanML3D order (:data:`
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
 from typing import Any, Mapping
 
@@ -57,6 +57,11 @@ class HumanMotion:
             raise ValueError(f"fps must be positive, got {self.fps}")
         object.__setattr__(self, "fps", float(self.fps))
         object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
+
+    def __reduce__(self) -> tuple:
+        """Pickle support (worker processes): the fields in order, ``meta`` as a plain dict."""
+        return type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
+                                 for v in (getattr(self, f.name) for f in fields(self)))
 
     @property
     def num_frames(self) -> int:
