@@ -24,8 +24,9 @@ call :func:`close` to stop them. Records are ``batch`` result rows (key ``<tenso
 Nothing is written to disk (the robot's compiled problems are read from, and on first use written
 to, the shared cache ``~/.cache/motion2robot``, as for every command).
 
-``project`` (the projection of a human motion onto what the robot can do, issue #18 item 3) lives
-in its own module and is re-exported here.
+:func:`project` (the projection of a human motion onto what the robot can do: retarget, then map
+the robot's keypoints back to the human skeleton at the human's scale and tempo) lives in
+:mod:`motion2robot.projection` and is re-exported here with its result type.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from typing import Any, Sequence
 from motion2robot.batch.work import WorkItem
 from motion2robot.batch.worker import BatchConfig, base_row
 from motion2robot.errors import MotionBatchError
+from motion2robot.projection import MotionArrayError, Projection, project
 from motion2robot.robot_motion import RobotMotion
 from motion2robot.score.batch_input import NAME, to_clips
 from motion2robot.score.figures import SetFigures, set_figures
@@ -46,8 +48,8 @@ from motion2robot.score.pool import close, run_clips
 from motion2robot.score.table import format_table
 
 __all__ = [
-    "MotionBatchError", "Sample", "ScoreResult", "close", "retarget_many", "score",
-    # "project",  <- issue #18 item 3: re-exported here at merge time
+    "MotionArrayError", "MotionBatchError", "Projection", "Sample", "ScoreResult", "close", "project",
+    "retarget_many", "score",
 ]
 
 
