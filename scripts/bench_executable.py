@@ -40,7 +40,7 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 def kinematic_options() -> RetargetOptions:
     """The pipeline as it was before the executability stages: kinematic retargeting only."""
-    return RetargetOptions(tempo="human", legs="whole", dynamic_balance=False)
+    return RetargetOptions(tempo="human", legs="whole", dynamic_balance=False, lift_feet=False)
 
 
 def default_options(tempo: str | None) -> RetargetOptions:
@@ -137,12 +137,14 @@ def main() -> int:
             fine = retarget(human, robot, fine_opts)
             (rn, jn), (rf, jf) = peak_accelerations(motion), peak_accelerations(fine)
             row["fine_ratio"] = max(rf / max(rn, 1e-9), jf / max(jn, 1e-9))
+            row["fine"] = f"root {rf / max(rn, 1e-9):.2f}x ({rn:.1f} -> {rf:.1f} m/s^2), joints {jf / max(jn, 1e-9):.2f}x ({jn:.0f} -> {jf:.0f} rad/s^2)"
         row["edge_only"] = edge_only(rep, motion.num_frames)
         rows.append(row)
         fb = f" fallback={row['fallback']['mode']}" if isinstance(row["fallback"], dict) else ""
         print(f"  {'OK  ' if rep.feasible else 'FAIL'} {name:48s} up={row['stays_up']!s:5s} tempo={row['tempo']:.2f}"
               f"{fb} kp={row['kp_mm']:.1f}mm" + (f" (kin {row['kp_base_mm']:.1f})" if base is not None else "")
-              + (f" failed={','.join(failed)}" if failed else ""), flush=True)
+              + (f" failed={','.join(failed)}" if failed else "")
+              + (f" 100fps: {row['fine']}" if row.get("fine_ratio", 0) > 1.5 else ""), flush=True)
     ok = [r for r in rows if "error" not in r]
     n = len(ok)
     if not n:

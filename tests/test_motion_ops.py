@@ -118,3 +118,18 @@ def test_with_contacts_keeps_labels_and_fills_missing() -> None:
     bare = HumanMotion(m.positions, m.fps)
     filled = with_contacts(bare)
     assert filled.contacts.shape == (40, 2) and filled.meta["contacts_source"].startswith("detected")
+
+
+def test_spline_is_c2_through_the_samples():
+    """The resampling spline passes through every sample and its curvature does not jump at them
+    (Catmull-Rom's does: a finer rate then shows acceleration spikes at the original frames)."""
+    from motion2robot.motion.ops import spline
+
+    rng = np.random.default_rng(3)
+    v = np.cumsum(rng.standard_normal((12, 2)), axis=0)
+    np.testing.assert_allclose(spline(v, np.arange(12.0)), v, atol=1e-12)
+    h = 1e-3
+    for k in range(1, 11):                                  # second derivative from both sides of knot k
+        left = (spline(v, np.array([k - 2 * h]))[0] - 2 * spline(v, np.array([k - h]))[0] + spline(v, np.array([k]))[0]) / h**2
+        right = (spline(v, np.array([k]))[0] - 2 * spline(v, np.array([k + h]))[0] + spline(v, np.array([k + 2 * h]))[0]) / h**2
+        np.testing.assert_allclose(left, right, atol=1e-2)

@@ -71,3 +71,34 @@ def test_damaged_records_are_ignored(tmp_path):
         bad.write_text(text)
         assert _recipe_lookup(bad) is None
     assert _recipe_lookup(tmp_path / "missing.json") is None
+
+
+def _package_imports(path) -> set[str]:
+    """Modules of the package ``path`` imports (top level or inside functions), as paths below it."""
+    import ast
+
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        names = []
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("motion2robot."):
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            names = [a.name for a in node.names if a.name.startswith("motion2robot.")]
+        for name in names:
+            rel = name.split(".", 1)[1].replace(".", "/")
+            out.add(rel + ".py")
+    return out
+
+
+def test_the_hashed_sources_are_closed_under_their_imports():
+    """Every module of ``retarget`` or ``robot`` that a hashed module imports is hashed too
+    (package __init__ files aside, which only re-export), so no code the graph is made by escapes
+    the digest. (Modules elsewhere only make data the spec carries, which is hashed field by field.)"""
+    from motion2robot.retarget.recipe import _PACKAGE, graph_sources
+
+    hashed = {p.relative_to(_PACKAGE).as_posix() for p in graph_sources()}
+    for path in graph_sources():
+        for rel in _package_imports(path):
+            if rel.startswith(("retarget/", "robot/")) and (_PACKAGE / rel).is_file() \
+                    and not rel.endswith("__init__.py"):
+                assert rel in hashed, f"{path.name} imports {rel}, which the recipe digest does not hash"

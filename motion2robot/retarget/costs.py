@@ -1,65 +1,51 @@
-"""THE one place naming every term of the retargeting problem and its weight.
+"""The names, kinds and weights of the retargeting problem's terms, from their registry.
 
-Cost = sum over terms of ``weight * ||residual||^2``. Position residuals are divided by the
-robot's leg length (so the weights do not depend on the robot's size); direction and axis
-residuals are differences of unit vectors; joint residuals are radians. Hard constraints
-(contact, floor, balance, self-collision) are stiff penalty terms here and are finished by the
-exact passes in :mod:`motion2robot.retarget.constraints`.
+Every term (name, default weight, hard or soft, residual) is declared in one module of
+:mod:`motion2robot.retarget.terms` and registered there in one line; this module derives the
+term lists and the :class:`Weights` dataclass from that registry, adding the solver's temporal
+weights. Cost = sum over terms of ``weight * ||residual||^2``. Hard constraints (contact, floor,
+balance, self-collision) are stiff penalty terms in the solve and are finished by the exact
+projection of :func:`motion2robot.retarget.solver.correct`.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, field, make_dataclass
 
-#: Terms evaluated by the compiled per-frame function, in the order of its weight vector.
-FRAME_TERMS: tuple[str, ...] = (
-    "keypoint",        # keypoint positions vs the scaled human keypoints
-    "direction",       # limb directions (hip->knee, elbow->wrist, ...) vs the human's
-    "pelvis_heading",  # root body's left axis vs the human pelvis left axis (hips line)
-    "torso_up",        # torso body's up axis vs the human spine direction
-    "foot_heading",    # each foot's forward axis vs the human ankle->toe direction (horizontal)
-    "sole_flat",       # each sole's normal vs world up
-    "posture",         # hinge angles vs the nominal posture
-    "contact_z",       # sole corners on the floor (z = target) in contact frames
-    "contact_xy",      # sole corners at their anchored xy in contact frames (no sliding, no twisting)
-    "floor",           # no sole corner below z = 0 (hinge), every frame
-    "balance",         # CoM ground projection inside the shrunk support polygon (hinge)
-    "self_collision",  # limb capsules vs torso / other leg: distance >= sum of radii (hinge);
-                       # bodies <= 2 hinges apart: joint-space cuts (joint_cuts.py), linear
-)
+from motion2robot.retarget.terms import TERMS
+
+#: Terms evaluated by the compiled per-frame function, in the order of its weight vector
+#: (the registry of :mod:`motion2robot.retarget.terms`: one module per term).
+FRAME_TERMS: tuple[str, ...] = tuple(t.name for t in TERMS)
 
 #: The terms that are hard constraints (residual zero when satisfied), corrected exactly at the end.
-HARD_TERMS: tuple[str, ...] = ("contact_z", "contact_xy", "floor", "balance", "self_collision")
+HARD_TERMS: tuple[str, ...] = tuple(t.name for t in TERMS if t.hard)
 
 
-@dataclass(frozen=True)
-class Weights:
-    """Weights of every cost term (dimensionless; see the module docstring for the units)."""
+#: Temporal weights, applied between neighbouring frames by the solver (per-frame units: rad, m),
+#: and the LM damping. acceleration: 20x the first tuning: at 5e-3 the LM's few iterations left
+#: single-frame second differences of 0.2 rad (100 rad/s^2 at 20 fps, the servo's whole torque on
+#: its rotor) in the legs of an MDM throw; 0.1 removes them and tracks as closely (keypoint error
+#: 50.8 -> 44 mm). damping: added to the Gauss-Newton normal matrix.
+SOLVER_WEIGHTS: tuple[tuple[str, float], ...] = (("velocity", 2e-3), ("acceleration", 0.1), ("damping", 1e-6))
 
-    keypoint: float = 1.0
-    direction: float = 0.3
-    pelvis_heading: float = 0.1
-    torso_up: float = 0.05
-    foot_heading: float = 0.05
-    sole_flat: float = 0.05
-    posture: float = 2e-3
-    contact_z: float = 1e5
-    contact_xy: float = 1e5
-    floor: float = 1e5
-    balance: float = 1e5
-    self_collision: float = 1e6
-    # temporal terms, applied between neighbouring frames by the solver (per-frame units: rad, m)
-    velocity: float = 2e-3
-    # 20x the first tuning: at 5e-3 the LM's few iterations left single-frame second differences
-    # of 0.2 rad (100 rad/s^2 at 20 fps, the servo's whole torque on its rotor) in the legs of an
-    # MDM throw; 0.1 removes them and tracks as closely (keypoint error 50.8 -> 44 mm)
-    acceleration: float = 0.1
-    # Levenberg-Marquardt damping added to the Gauss-Newton normal matrix
-    damping: float = 1e-6
 
-    def frame_vector(self) -> list[float]:
-        """Weights of :data:`FRAME_TERMS` in order (the compiled function's ``w`` input)."""
-        return [float(getattr(self, t)) for t in FRAME_TERMS]
+def _frame_vector(self) -> list[float]:
+    """Weights of :data:`FRAME_TERMS` in order (the compiled function's ``w`` input)."""
+    return [float(getattr(self, t)) for t in FRAME_TERMS]
 
-    def as_dict(self) -> dict[str, float]:
-        return asdict(self)
+
+def _as_dict(self) -> dict[str, float]:
+    return asdict(self)
+
+
+#: Weights of every term (dimensionless; defaults from the terms' declarations) and of the
+#: solver's temporal terms: a frozen dataclass with one float field per name.
+Weights = make_dataclass(
+    "Weights",
+    [(t.name, float, field(default=float(t.weight))) for t in TERMS]
+    + [(name, float, field(default=value)) for name, value in SOLVER_WEIGHTS],
+    frozen=True,
+    namespace={"__module__": __name__, "frame_vector": _frame_vector, "as_dict": _as_dict,
+               "__doc__": "Weights of every cost term and of the solver's temporal terms (dimensionless)."},
+)

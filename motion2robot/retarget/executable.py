@@ -8,7 +8,7 @@ attempt that passes, in this order:
 2. whole body slowed: first at the cap (if even that fails, no smaller slow-down can pass and the
    steps between are skipped), else the smallest of :data:`~.tempo.AUTO_STEPS` that passes; not
    tried when x1.0 fails a check no tempo changes (:data:`TEMPO_PROOF`: limits, self-collision,
-   the feet on the floor);
+   the feet on the floor, unless the foot plan left swings free as too fast for this tempo);
 3. the ``stance`` alternative (:mod:`~.stance`: legs in a fixed stance, upper body and head
    perform), at x1.0, then slowed the same way. Clips with flight phases (runs, jumps) start here:
    a flat-footed robot of servos cannot make the take-off impulse.
@@ -55,6 +55,14 @@ class Attempt:
         return [n for n, c in self.report.checks.items() if c.get("ok") is False]
 
 
+def tempo_proof(motion: RobotMotion) -> frozenset:
+    """The checks a slower tempo cannot make ``motion`` pass: :data:`TEMPO_PROOF`, without
+    ``ground`` when its foot plan left swings free for being too fast at this tempo (slower, they
+    are planned: lifted, the stance foot held)."""
+    feet = (motion.meta.get("solver") or {}).get("feet") or {}
+    return TEMPO_PROOF - {"ground"} if feet.get("free_swings_too_fast") else TEMPO_PROOF
+
+
 def _judge(robot: Robot, options: object | None) -> Callable[[RobotMotion], object]:
     from motion2robot.validate import CheckOptions, check  # the judge sits above the retargeter
 
@@ -87,7 +95,7 @@ def _search(make: Callable[[float], Attempt], factors: list[float]) -> tuple[Att
     tried: list[Attempt] = []
     first = make(factors[0])
     tried.append(first)
-    if first.feasible or len(factors) == 1 or set(first.failed()) & TEMPO_PROOF:
+    if first.feasible or len(factors) == 1 or set(first.failed()) & tempo_proof(first.motion):
         return (first if first.feasible else None), tried
     last = make(factors[-1])
     tried.append(last)

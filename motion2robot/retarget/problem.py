@@ -41,6 +41,8 @@ from motion2robot.errors import RobotConfigError
 from motion2robot.retarget import native
 from motion2robot.retarget.collision import CapsulePair, collision_pairs, pair_gap
 from motion2robot.retarget.costs import FRAME_TERMS, HARD_TERMS
+from motion2robot.retarget.terms import TERMS, Inputs
+from motion2robot.retarget.terms.balance import HMAX
 from motion2robot.retarget.joint_cuts import JointCut, joint_cuts
 from motion2robot.robot.kinematics import TangentFrames, point_in_body
 from motion2robot.robot.robot import Robot
@@ -53,8 +55,6 @@ LIMBS: tuple[tuple[str, str], ...] = (
 )
 #: Regularisation of the exact correction (its step tends to the minimum-norm one as this -> 0).
 PROJECTION_MU = 1e-8
-#: Maximum number of support-polygon half-planes per frame.
-HMAX = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,10 +127,6 @@ def _layout(k: int, dpairs: int) -> dict[str, slice]:
     return out
 
 
-def _unit(v):
-    return v / ca.sqrt(ca.sumsqr(v) + 1e-12)
-
-
 def _geometry(spec: ProblemSpec, qpos, dx):
     """Tangent frames and the points every term needs, at ``qpos`` moved by tangent step ``dx``
     (to first order: exact value and Jacobian at dx = 0)."""
@@ -171,46 +167,17 @@ def _ancestry(m, b: int) -> list[int]:
 def residuals(spec: ProblemSpec, q, dx, p, w):
     """Weighted residual vector ``r`` (cost = ||r||^2), per-term costs (list) and the unweighted
     hard-constraint rows (dict by term of :data:`~motion2robot.retarget.costs.HARD_TERMS`) at ``q``
-    moved by ``dx``, for frame parameters ``p`` and term weights ``w`` (casadi SX)."""
-    rb = spec.robot
-    L, lay = spec.length, spec.layout
-    W = dict(zip(FRAME_TERMS, [w[i] for i in range(len(FRAME_TERMS))]))
-    P = {k: p[s] for k, s in lay.items()}
+    moved by ``dx``, for frame parameters ``p`` and term weights ``w`` (casadi SX); the terms are
+    those of :data:`~motion2robot.retarget.terms.TERMS`, in order."""
     tf, kp, corners, com, gaps = _geometry(spec, q, dx)
-    res: dict[str, list] = {t: [] for t in FRAME_TERMS}
-    kpw = rb.keypoint_weights
-    for i, x in enumerate(kp):
-        res["keypoint"].append(ca.sqrt(kpw[i] * P["kp_w"][i]) * (x - P["kp_t"][3 * i:3 * i + 3]) / L)
-    for d, (a, b) in enumerate(spec.dir_pairs):
-        res["direction"].append(ca.sqrt(P["dir_w"][d]) * (_unit(kp[b] - kp[a]) - P["dir_t"][3 * d:3 * d + 3]))
-    res["pelvis_heading"].append(tf.vector(rb.root_body, spec.left_local) - P["pelvis_left"])
-    res["torso_up"].append(tf.vector(rb.torso_body, spec.torso_up_local) - P["torso_up"])
-    for f, body in enumerate(rb.foot_bodies):
-        fwd = tf.vector(int(body), spec.foot_fwd_local[f])
-        res["foot_heading"].append(ca.sqrt(P["foot_fwd_w"][f]) * (fwd[0:2] - P["foot_fwd"][3 * f:3 * f + 2]))
-        up = tf.vector(int(body), spec.foot_up_local[f])
-        res["sole_flat"].append(up[0:2])
-    res["posture"].append(q[7:] + dx[6:] - ca.DM(rb.nominal_qpos[7:]))
-    for c, x in enumerate(corners):
-        f = c // 4
-        tgt = P["sole_t"][3 * c:3 * c + 3]
-        res["contact_z"].append(ca.sqrt(P["sole_wz"][f]) * (x[2] - tgt[2]) / L)
-        res["floor"].append(ca.fmin(x[2], 0) / L)
-    for c, x in enumerate(corners):  # a planted sole neither slides nor twists: every corner stays put
-        res["contact_xy"].append(ca.sqrt(P["sole_wxy"][c // 4]) * (x[0:2] - P["sole_t"][3 * c:3 * c + 2]) / L)
-    bal = P["bal"]
-    worst = bal[0] * com[0] + bal[1] * com[1] - bal[2]
-    for h in range(1, HMAX):
-        worst = ca.fmax(worst, bal[3 * h] * com[0] + bal[3 * h + 1] * com[1] - bal[3 * h + 2])
-    res["balance"].append(ca.sqrt(P["bal_w"]) * ca.fmax(0, worst) / L)  # most violated edge
-    for g in gaps:
-        res["self_collision"].append(ca.fmin(g, 0) / L)
+    x = Inputs(spec, {k: p[s] for k, s in spec.layout.items()}, tf, kp, corners, com, gaps, q, dx)
+    res = {t.name: t.residual(x) for t in TERMS}
     hard = {t: ca.vertcat(*res[t]) if res[t] else ca.SX.zeros(0, 1) for t in HARD_TERMS}
     r_all, terms = [], []
-    for t in FRAME_TERMS:
+    for i, t in enumerate(FRAME_TERMS):
         r = ca.vertcat(*res[t]) if res[t] else ca.SX.zeros(0, 1)
-        r_all.append(ca.sqrt(W[t]) * r)
-        terms.append(W[t] * ca.sumsqr(r))
+        r_all.append(ca.sqrt(w[i]) * r)
+        terms.append(w[i] * ca.sumsqr(r))
     return ca.vertcat(*r_all), terms, hard
 
 

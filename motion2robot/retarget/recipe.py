@@ -3,8 +3,10 @@ compiled library in the cache without building the casadi graph first (op3: 2.3 
 building and 0.6 s of lane source generation in every process; the G1: ~7 s).
 
 The digest covers everything the graph is made from, and more rather than less: the source text
-of every module of ``motion2robot.retarget`` and ``motion2robot.robot`` (any code change makes a
-new key), the casadi and numpy versions, the compiler flags and lane width, the MuJoCo model's
+of the modules the graph and its code are made by (:data:`GRAPH_MODULES`, which a test keeps closed
+under their imports from ``retarget`` and ``robot``, and every module of ``motion2robot.robot``;
+a change to them makes a new key, a change to the stages around the solve does not; modules
+elsewhere only make data the spec carries), the casadi and numpy versions, the compiler flags and lane width, the MuJoCo model's
 kinematic arrays (bodies, joints, sites), the robot's keypoint/sole/foot/nominal data, and every
 field of the :class:`~motion2robot.retarget.problem.ProblemSpec` (collision pairs with their
 capsule and polytope numbers, layout, leg length, local axes). A stale library would give wrong
@@ -27,7 +29,19 @@ MODEL_ARRAYS = ("body_parentid", "body_pos", "body_quat", "body_ipos", "body_iqu
 #: Robot fields the problem reads.
 ROBOT_FIELDS = ("joint_ids", "nominal_qpos", "keypoints", "keypoint_sites", "keypoint_weights", "sole_sites",
                 "foot_bodies", "root_body", "torso_body")
-_CODE = (Path(__file__).resolve().parent, Path(__file__).resolve().parent.parent / "robot")
+#: Modules (paths below the package) whose code builds the graph or its generated code.
+GRAPH_MODULES = ("retarget/problem.py", "retarget/compiled.py", "retarget/lanes.py", "retarget/native.py",
+                 "retarget/collision.py", "retarget/capsule_fit.py", "retarget/polytope.py",
+                 "retarget/joint_cuts.py", "retarget/costs.py", "retarget/recipe.py",
+                 "validate/collision.py", "validate/models.py", "util/cache.py")
+_PACKAGE = Path(__file__).resolve().parent.parent
+
+
+def graph_sources() -> list[Path]:
+    """The source files hashed into the digest: :data:`GRAPH_MODULES`, the cost terms
+    (``retarget/terms/*.py``) and ``robot/*.py``."""
+    return ([_PACKAGE / m for m in GRAPH_MODULES] + sorted((_PACKAGE / "retarget" / "terms").glob("*.py"))
+            + sorted((_PACKAGE / "robot").glob("*.py")))
 
 
 def _feed(h, x) -> None:
@@ -58,11 +72,10 @@ def _feed(h, x) -> None:
 def recipe_digest(spec, build: str) -> str:
     """Hex digest of what ``spec``'s generated code depends on; ``build`` names the code
     generator's settings (flags, lane width)."""
-    h = hashlib.sha256(b"motion2robot problem recipe 1")
-    for folder in _CODE:
-        for path in sorted(folder.glob("*.py")):
-            h.update(path.name.encode())
-            h.update(path.read_bytes())
+    h = hashlib.sha256(b"motion2robot problem recipe 2")
+    for path in graph_sources():
+        h.update(path.relative_to(_PACKAGE).as_posix().encode())
+        h.update(path.read_bytes())
     _feed(h, (ca.__version__, np.__version__, build))
     model = spec.robot.model
     for name in MODEL_ARRAYS:

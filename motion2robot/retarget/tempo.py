@@ -2,8 +2,8 @@
 
 A tempo factor k >= ... stretches time: the motion's durations are multiplied by k (k = 1: as
 generated; k = 2: twice as slow), the frame rate is kept, so a clip of T frames becomes
-round((T - 1) * k) + 1 frames. Positions are interpolated with Catmull-Rom splines through the
-original samples (:func:`~motion2robot.motion.ops.catmull_rom`); contact labels take the nearest
+round((T - 1) * k) + 1 frames. Positions are interpolated with natural cubic splines through the
+original samples (:func:`~motion2robot.motion.ops.spline`, C2); contact labels take the nearest
 original frame. Joint speeds fall by 1/k and accelerations (hence inertial torques and the ZMP's
 offset from the CoM, (z_c / g) c'') by 1/k^2.
 
@@ -23,7 +23,7 @@ import numpy as np
 
 from motion2robot.errors import UserError
 from motion2robot.motion.human import HumanMotion
-from motion2robot.motion.ops import catmull_rom
+from motion2robot.motion.ops import spline
 
 #: Default cap of the ``auto`` policy.
 DEFAULT_CAP = 2.5
@@ -75,6 +75,6 @@ def stretch(human: HumanMotion, factor: float) -> HumanMotion:
     T = human.num_frames
     n = max(2, int(round((T - 1) * factor)) + 1)
     u = np.minimum(np.arange(n) / factor, T - 1)
-    pos = catmull_rom(human.positions, u)
+    pos = spline(human.positions, u)
     contacts = None if human.contacts is None else human.contacts[np.clip(np.rint(u).astype(int), 0, T - 1)]
     return human.with_(positions=pos, contacts=contacts, meta={"tempo": float(factor)})

@@ -1,0 +1,120 @@
+"""The solver-driven stages of the whole-body pipeline, in the order they run.
+
+1. :func:`free_solve`: every frame from the nominal posture with the soles only asked to touch the
+   floor in contact frames (floor softened: continuation), then the exact velocity clamp;
+2. :func:`pinned_solve`: again with every sole corner pinned to the contact plan's targets and the
+   CoM over the shrunk support polygon (balance);
+3. :func:`servo_rounds`: alternate smoothing the hinges (and, with balance, the root) to what the
+   servos can follow (:mod:`~.smoothing`; rounded off, not clamped into a bang-bang) and a Newton
+   projection onto the hard constraints, then the exact velocity clamp; up to REPAIR_ROUNDS more
+   rounds while self-collision capsules still overlap;
+4. :func:`joint_smoothing`: one filter for root and hinges together
+   (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz
+   (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves' kinks
+   and noise; a projection takes the pinned soles back, its pushes on free limbs
+   spread over neighbouring frames (:func:`~.smoothing.spread_correction`).
+
+Each takes the :class:`~.setup.Setup` and returns the trajectory (T, nq).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from motion2robot.retarget.constraints import clamp_velocity
+from motion2robot.retarget.contact_plan import ContactPlan, unpinned
+from motion2robot.retarget.setup import Setup
+from motion2robot.retarget.smoothing import (
+    low_pass,
+    smooth_hinges,
+    smooth_jointly,
+    smooth_to_targets,
+    spread_correction,
+)
+from motion2robot.retarget.solver import correct
+from motion2robot.retarget.targets import initial_qpos
+from motion2robot.robot.chains import free_limbs
+
+#: Factor on the floor weight in the first (free-feet) stage.
+STAGE1_SOFTENING = 1e-3
+#: Extra correction rounds at most, run while some self-collision capsule pair still overlaps by
+#: more than REPAIR_TOLERANCE (m).
+REPAIR_ROUNDS = 4
+REPAIR_TOLERANCE = 0.001
+#: Newton projection steps at most per round beyond the first two, on the frames still violating
+#: a hard constraint (deep self-collisions need ~10).
+EXTRA_CORRECTIONS = 8
+
+
+def _clamp(setup: Setup, Q: np.ndarray) -> np.ndarray:
+    Q[:, 7:] = clamp_velocity(Q[:, 7:], setup.robot.velocity_limit, setup.fps)
+    return Q
+
+
+def free_solve(setup: Setup) -> tuple[np.ndarray, object]:
+    """Stage 1: the free-feet solve (and its stats); its velocity-clamped answer starts stage 2."""
+    # the floor softened (continuation): a stiff floor from the first iteration traps frames whose
+    # way from the nominal posture passes below it
+    w1 = replace(setup.weights, floor=setup.weights.floor * STAGE1_SOFTENING)
+    P1 = unpinned(setup).params(setup, balance=False)
+    q0 = initial_qpos(setup.problem.spec, setup.kp)
+    Q, stats = setup.solve(setup.problem, P1, q0, w1, setup.opt.iterations[0], setup.robot.lower, setup.robot.upper)
+    return _clamp(setup, Q), stats
+
+
+def pinned_solve(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.ndarray, object]:
+    """Stage 2: the solve with the contact plan's soles pinned and balance rows on."""
+    return setup.solve(setup.problem, plan.params(setup), Q, setup.weights, setup.opt.iterations[1],
+                       setup.robot.lower, setup.robot.upper)
+
+
+def servo_rounds(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.ndarray, int]:
+    """Stage 3: the rounds of (smoothing within the servo's limits, projection, velocity clamp);
+    returns the trajectory and the number of rounds run."""
+    opt, robot = setup.opt, setup.robot
+    lo, hi = robot.lower, robot.upper
+    P = plan.params(setup)
+    rounds = 0
+    while rounds < opt.corrections + REPAIR_ROUNDS:
+        # past opt.corrections, more rounds only while the capsules still overlap
+        if rounds >= opt.corrections and (rounds == 0 or setup.points(Q)[3].min(initial=0.0) >= -REPAIR_TOLERANCE):
+            break
+        rounds += 1
+        if opt.smoothing:
+            Q[:, 7:] = smooth_hinges(Q[:, 7:], *setup.servo, setup.fps, robot.velocity_limit, lo, hi)
+            if setup.root_target is not None:  # quasi-static: the root's acceleration would move the ZMP
+                Q[:, :3] = smooth_to_targets(Q[:, :3], np.inf, setup.root_target, setup.fps)
+        Q, _ = correct(setup.problem, P, Q, lo, hi, setup.max_step, 2, free_at_bounds=rounds > opt.corrections,
+                       extra=EXTRA_CORRECTIONS)
+        Q = _clamp(setup, Q)
+    return Q, rounds
+
+
+def smooth_configuration(setup: Setup, Q: np.ndarray) -> np.ndarray:
+    """:func:`~motion2robot.retarget.smoothing.smooth_jointly` over root position, root quaternion
+    (renormalised) and hinges, then the exact joint limits and velocity clamp."""
+    robot = setup.robot
+    v, a = setup.servo
+    racc = setup.root_target if setup.root_target is not None else np.inf
+    vt = np.concatenate([np.full(7, np.inf), v])
+    at = np.concatenate([np.full(3, racc), np.full(4, np.inf), a])
+    # the low-pass after the target smoothing: its weighted rows end in kinks in the columns that
+    # did not need them (a walk-back's shoulder at 100 fps: 12 -> 25 rad/s^2; with it 15)
+    out = low_pass(smooth_jointly(Q, vt, at, setup.fps), setup.fps)
+    out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
+    out[:, 7:] = np.clip(clamp_velocity(out[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
+    return out
+
+
+def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarray:
+    """Stage 4: the joint filter, a projection back onto the hard constraints (to second order of
+    what the filter moved), the projection's pushes on free limbs spread over neighbouring frames."""
+    robot = setup.robot
+    smooth = smooth_configuration(setup, Q)
+    Q, _ = correct(setup.problem, plan.params(setup), smooth, robot.lower, robot.upper, setup.max_step, 1,
+                   extra=EXTRA_CORRECTIONS)
+    Q[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], free_limbs(robot), setup.fps)
+    Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
+    return Q
