@@ -31,7 +31,6 @@ import casadi as ca
 import mujoco
 import numpy as np
 
-from motion2robot.retarget.anchor_gap import segment_distance
 from motion2robot.retarget.capsule_fit import fit_capsule
 from motion2robot.retarget.polytope import BodyPolytope, body_polytope, clearance_np, clearance_sx
 from motion2robot.robot.collision_filter import tested_body_pairs
@@ -192,7 +191,9 @@ def overstatement(m: mujoco.MjModel, cap: BodyCapsule) -> float:
     from its segment: the margin by which it overstates that geometry in every direction (0 for a
     capsule fitted to it; negative for an inscribed one, which does not hold it)."""
     pts = np.concatenate([_geom_points(m, g) for g in collision_geoms(m)[cap.body]])
-    return cap.radius - float(segment_distance(pts, pts, cap.p0, cap.p1).max())
+    axis = cap.p1 - cap.p0
+    t = np.clip((pts - cap.p0) @ axis / max(float(axis @ axis), 1e-24), 0.0, 1.0)
+    return cap.radius - float(np.linalg.norm(pts - cap.p0 - t[:, None] * axis, axis=1).max())
 
 
 def body_polytopes(m: mujoco.MjModel) -> dict[int, BodyPolytope]:
