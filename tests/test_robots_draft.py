@@ -184,7 +184,7 @@ def test_generic_humanoid_by_geometry(generic_mjcf, tmp_path):
     ("<mujoco><worldbody><body name='b'><freejoint/><geom size='0.1'/><body name='c'><joint type='ball'/>"
      "<geom size='0.1'/></body></body></worldbody></mujoco>", "is not a hinge"),
     ("<mujoco><worldbody><body name='b'><freejoint/><geom size='0.1'/><body name='c' pos='0 0.1 0.5'>"
-     "<joint axis='1 0 0'/><geom size='0.1'/></body></body></worldbody></mujoco>", "cannot find a left leg"),
+     "<joint axis='1 0 0'/><geom size='0.1'/></body></body></worldbody></mujoco>", "cannot find a left foot"),
     ("<mujoco><worldbody><bogus/></worldbody></mujoco>", "MuJoCo cannot read this MJCF"),
 ])
 def test_not_a_humanoid(tmp_path, xml, needle):

@@ -103,7 +103,7 @@ def test_init_creates_the_output_folder_and_prints_keypoint_reasons(tmp_path, ca
 BAD = [
     ("nofeet", '<mujoco><worldbody><body name="pelvis" pos="0 0 1"><freejoint/><geom size="0.1"/>'
                '<body name="arm" pos="0 0.2 0.3"><joint axis="1 0 0"/><geom size="0.05"/></body></body></worldbody></mujoco>',
-     ["cannot find a left leg", "humanoid standing along z"]),
+     ["cannot find a left foot", "root body pelvis", "must stand along z with x forward"]),
     ("nofloor", None, ["foot ptoe", "no collision geometry", "add a collision geom"]),
     ("nomesh", '<mujoco><asset><mesh name="foot" file="meshes/foot.stl"/></asset><worldbody><body name="b">'
                '<freejoint/><geom type="mesh" mesh="foot"/></body></worldbody></mujoco>',

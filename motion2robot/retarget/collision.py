@@ -10,9 +10,15 @@ nominal posture. Mesh bodies get capsules fitted to their vertices (:mod:`~motio
 Boxes get a capsule containing them (over the whole length, radius the cross
 half-diagonal) unless that capsule already touches the other one at the nominal posture, when the
 inscribed capsule is used. Pairs MuJoCo does not test (:mod:`~motion2robot.robot.collision_filter`), and pairs already touching at the nominal posture, are left out
-(overlaps of the model's hulls by design); pairs the nominal posture holds closer than
-:data:`NOMINAL_CLEARANCE` get that much clearance at the nominal posture (their capsules overstate
-the hulls). Capsule distance = segment distance - radii (exact);
+(overlaps of the model's hulls by design). Capsules may come closer than touching only by what
+they provably overstate their geometry (:func:`overstatement`: the radius less the farthest hull
+point's distance from the segment, the same in every direction), never more than
+:data:`NOMINAL_CLEARANCE` below their clearance at the nominal posture. Capsules fitted to their
+geometry overstate it by nothing in some direction, so they get no allowance: the overstatement a
+pair shows at the nominal posture lies along the direction the nominal posture sets, and another
+posture can bring the tight sides together (the drafted Talos' shin capsules, 14.5 mm wider than
+the hulls along their nominal gap, let the shins 4.7 mm into each other under a 9.9 mm allowance).
+Capsule distance = segment distance - radii (exact);
 :data:`MARGIN` covers box corners outside their capsule. Pairs of bodies one or two hinges apart
 that this model leaves out are kept apart in joint space (:mod:`~motion2robot.retarget.joint_cuts`).
 """
@@ -36,7 +42,7 @@ from motion2robot.robot.robot import Robot
 #: wrist keypoint's body and below, up to 6 bodies: a gripper's fingers and motors, whose smaller
 #: links went 5 mm into Talos' thigh when only the 2 largest were kept).
 LIMB_BODIES = {"leg": 5, "arm": 2, "torso": 2, "hand": 6}
-#: Pairs closer than this (m) at the nominal posture get this much clearance there (see CapsulePair).
+#: Cap (m) on how much closer than at the nominal posture an allowance lets a pair come (see CapsulePair).
 NOMINAL_CLEARANCE = 0.02
 #: A box whose long half-extent is this many times its cross half-extent is "elongated".
 ELONGATED = 1.5
@@ -58,8 +64,9 @@ class BodyCapsule:
 @dataclass(frozen=True, eq=False)
 class CapsulePair:
     """Two capsules, or a capsule and a body's polytope, to keep apart; ``allowance`` (m) is
-    subtracted from their radii (pairs the nominal posture holds closer than
-    :data:`NOMINAL_CLEARANCE`, whose hulls the capsules overstate)."""
+    subtracted from their radii: what the two capsules provably overstate their bodies' geometry
+    by (:func:`overstatement`), for pairs the nominal posture holds closer than
+    :data:`NOMINAL_CLEARANCE`."""
 
     name: str
     a: BodyCapsule
@@ -179,6 +186,16 @@ def body_capsules(m: mujoco.MjModel, contain: bool = False) -> dict[int, BodyCap
     return out
 
 
+def overstatement(m: mujoco.MjModel, cap: BodyCapsule) -> float:
+    """How much (m) the capsule's radius exceeds the farthest point of its body's collision geoms
+    from its segment: the margin by which it overstates that geometry in every direction (0 for a
+    capsule fitted to it; negative for an inscribed one, which does not hold it)."""
+    pts = np.concatenate([_geom_points(m, g) for g in collision_geoms(m)[cap.body]])
+    axis = cap.p1 - cap.p0
+    t = np.clip((pts - cap.p0) @ axis / max(float(axis @ axis), 1e-24), 0.0, 1.0)
+    return cap.radius - float(np.linalg.norm(pts - cap.p0 - t[:, None] * axis, axis=1).max())
+
+
 def body_polytopes(m: mujoco.MjModel) -> dict[int, BodyPolytope]:
     """Each body's 14-DOP around its collision geoms (:mod:`~motion2robot.retarget.polytope`)."""
     return {b: body_polytope(m, b, [(g, _mesh_vertices(m, g)) for g in gs]) for b, gs in collision_geoms(m).items()}
@@ -287,8 +304,10 @@ def collision_pairs(robot: Robot) -> tuple[CapsulePair, ...]:
                 if clearance <= 0:
                     continue  # touching at the nominal posture: by design
                 name = f"{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, a)}-{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)}"
-                # polytopes hug their body (no allowance: it let G1's upper arm 11 mm into the torso)
-                allowance = 0.0 if isinstance(cb, BodyPolytope) else max(0.0, NOMINAL_CLEARANCE - clearance)
+                # polytopes hug their body (no allowance: it let G1's upper arm 11 mm into the torso);
+                # capsules come closer only by what they provably overstate (module docstring)
+                allowance = 0.0 if isinstance(cb, BodyPolytope) else \
+                    max(0.0, min(NOMINAL_CLEARANCE - clearance, overstatement(m, ca_) + overstatement(m, cb)))
                 out.append(CapsulePair(name, ca_, cb, allowance))
     return tuple(out)
 

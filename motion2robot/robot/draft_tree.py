@@ -130,8 +130,9 @@ class Skeleton:
         root_z = self.d.xpos[self.root][2]
         cands = [b for b in cands if self.d.xpos[b][2] < root_z - 0.05]
         if not cands:
-            raise RobotConfigError(f"{self.where}: cannot find a {side} leg (no body below the root on the {side}, y "
-                                   f"{'>' if sign > 0 else '<'} 0, at qpos0); is the model a humanoid standing along z with x forward?")
+            raise RobotConfigError(f"{self.where}: cannot find a {side} foot (no body 5 cm or more below the root body "
+                                   f"{self.bname(self.root)} on the {side}, y {'>' if sign > 0 else '<'} 0, at qpos0); "
+                                   "a humanoid must stand along z with x forward and y to its left, both legs below its root body")
         low = min(cands, key=lambda b: self.d.xpos[b][2])
         foot = low
         while foot not in (self.root, 0) and not geo.body_geoms(self.m, foot):
