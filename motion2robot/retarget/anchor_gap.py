@@ -51,14 +51,18 @@ def _push(seg: np.ndarray, other: np.ndarray, need: float) -> np.ndarray:
     return moves[-1, int(np.argmax(gap[-1]))]
 
 
-def _foot_segment(anchor: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """World (2, 2) ends of a foot capsule whose sole sits at ``anchor`` (4, 3) corners; ``local``
-    (2, 2) the capsule ends relative to the sole centre in the sole's frame (x forward)."""
-    centre = anchor[:, :2].mean(axis=0)
-    fwd = (anchor[0, :2] + anchor[1, :2]) - (anchor[2, :2] + anchor[3, :2])
-    c, s = fwd / max(np.linalg.norm(fwd), 1e-12)
-    rot = np.array([[c, -s], [s, c]])
-    return centre + local @ rot.T
+def foot_segments(corners: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """World (..., 2, 2) ends of foot capsules whose soles sit at ``corners`` (..., 4, 3); ``local``
+    (2, 2) the capsule ends relative to the sole centre in the sole's frame (x forward). NaN soles
+    give NaN ends."""
+    xy = corners[..., :2]
+    centre = xy.mean(axis=-2)                                           # (..., 2)
+    fwd = (xy[..., 0, :] + xy[..., 1, :]) - (xy[..., 2, :] + xy[..., 3, :])
+    fwd = fwd / np.maximum(np.linalg.norm(fwd, axis=-1, keepdims=True), 1e-12)
+    c, s = fwd[..., None, 0], fwd[..., None, 1]                         # (..., 1)
+    x = centre[..., None, 0] + c * local[:, 0] - s * local[:, 1]
+    y = centre[..., None, 1] + s * local[:, 0] + c * local[:, 1]
+    return np.stack([x, y], axis=-1)
 
 
 def separate_anchors(anchors: np.ndarray, labels: np.ndarray, local: np.ndarray, radius: np.ndarray,
@@ -76,8 +80,8 @@ def separate_anchors(anchors: np.ndarray, labels: np.ndarray, local: np.ndarray,
         older = [(a2, b2) for (f2, a2, b2) in ph[:k] if f2 == g and a2 <= a < b2]
         if not older:
             continue
-        other = _foot_segment(out[a, g], local[g])
-        move = _push(_foot_segment(out[a, f], local[f]), other, need)
+        other = foot_segments(out[a, g], local[g])
+        move = _push(foot_segments(out[a, f], local[f]), other, need)
         out[a:b, f, :, :2] += move
         total = move
         pushed = max(pushed, float(np.linalg.norm(total)))

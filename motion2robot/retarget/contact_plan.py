@@ -12,7 +12,7 @@ Units: metres; world frame z up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -89,8 +89,7 @@ def plan_contacts(setup: Setup, corners: np.ndarray) -> ContactPlan:
     half = min(min(f.sole_half) for f in robot.config.feet)
     margin = opt.margin if opt.margin is not None else MARGIN_FRACTION * half
     if not opt.contacts:
-        base = unpinned(setup)
-        return ContactPlan(base.labels, base.pinned, None, None, base.planes, base.support, margin, None, 0.0)
+        return replace(unpinned(setup), margin=margin)
     labels = setup.labels
     soles = anchor_soles(corners, labels)
     feet = foot_capsules(robot)

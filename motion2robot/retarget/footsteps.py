@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion2robot.retarget.anchor_gap import foot_segments, segment_distance
 from motion2robot.retarget.contacts import phases
 
 #: Swing apex as a fraction of the robot's standing root height (op3: ~2 cm, G1: ~6 cm).
@@ -89,12 +90,9 @@ def lift(s: np.ndarray) -> np.ndarray:
 
 def _pose(corners: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """Centre (2,), yaw and corner layout (4, 2) in the sole's frame, of flat (4, 3) corners."""
-    xy = corners[:, :2]
-    centre = xy.mean(axis=0)
-    fwd = (xy[0] + xy[1]) - (xy[2] + xy[3])
-    yaw = float(np.arctan2(fwd[1], fwd[0]))
+    centre, yaw = (v[0] for v in _centre_yaw(corners[None]))
     c, s = np.cos(yaw), np.sin(yaw)
-    return centre, yaw, (xy - centre) @ np.array([[c, -s], [s, c]])
+    return centre, float(yaw), (corners[:, :2] - centre) @ np.array([[c, -s], [s, c]])
 
 
 def _place(centre: np.ndarray, yaw: np.ndarray, layout: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -142,15 +140,6 @@ def swing_path(a: np.ndarray, b: np.ndarray, free: np.ndarray, apex: float) -> n
     return _place(centre, yaw, layout, apex * lift(s))
 
 
-def _segment(corners: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """(n, 2, 2) world ends of foot capsules with sole-frame ends ``local`` (2, 2), soles (n, 4, 3)."""
-    centre, yaw = _centre_yaw(corners)
-    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
-    x = centre[:, None, 0] + c * local[:, 0] - s * local[:, 1]
-    y = centre[:, None, 1] + s * local[:, 0] + c * local[:, 1]
-    return np.stack([x, y], axis=-1)
-
-
 def clear_swings(targets: np.ndarray, swing: np.ndarray, contact: np.ndarray, local: np.ndarray,
                  radius: np.ndarray, clearance: float) -> tuple[np.ndarray, float]:
     """Swing paths bent sideways (outwards: the left foot to the stance foot's left) where they
@@ -159,8 +148,6 @@ def clear_swings(targets: np.ndarray, swing: np.ndarray, contact: np.ndarray, lo
     swing's horizontal progress, so the bend starts and ends with the horizontal motion, C2),
     judged where the bend is at least BEND_FROM of D (closer to the placements, they decide).
     Returns the targets and the largest bend (m)."""
-    from motion2robot.retarget.anchor_gap import segment_distance
-
     out = targets.copy()
     need = float(radius.sum() + clearance)
     worst = 0.0
@@ -173,13 +160,13 @@ def clear_swings(targets: np.ndarray, swing: np.ndarray, contact: np.ndarray, lo
         stance = contact[a:b, g] & ~np.isnan(out[a:b, g, 0, 0])
         if not stance.any():
             continue
-        other = _segment(out[a:b, g], local[g])
+        other = foot_segments(out[a:b, g], local[g])
         _, yaw_g = _centre_yaw(out[a:b, g])                  # NaN where the other foot has no target
         side = 1.0 if f == 0 else -1.0                          # left foot: towards +y of the stance sole
         lateral = side * np.stack([-np.sin(yaw_g), np.cos(yaw_g)], axis=-1)   # (n, 2)
         push = 0.0
         for _ in range(4):
-            seg = _segment(out[a:b, f], local[f])
+            seg = foot_segments(out[a:b, f], local[f])
             gap = segment_distance(seg[:, 0], seg[:, 1], other[:, 0], other[:, 1])
             # near lift-off and touch-down the placements decide (anchor_gap keeps them apart)
             deficit = np.where(stance & (bump >= BEND_FROM), np.nan_to_num(need - gap, nan=0.0), 0.0)
