@@ -195,6 +195,18 @@ def test_dry_run_needs_no_bus(tmp_path):
     assert rep.dry_run and rep.stop_reason == "end" and tel.ticks and tel.ticks[-1]["present"] is None
 
 
+def test_the_end_hold_sends_no_tick_off_the_schedule(tmp_path):
+    """A hold that ends between two deadlines ends there, without an early tick: at a low rate
+    an early last tick made the loop figures report a jitter of most of a period."""
+    hold = TorquePolicy(on_end=0.13, ramp_speed=6.0, watchdog_ms=500)
+    rep = stream_motion(motion(wave(10)), LIMITS, SMAP, None, dry_run=True, rate_hz=20.0,
+                        telemetry_path=tmp_path / "t.jsonl", policy=hold)
+    tel = read_telemetry(tmp_path / "t.jsonl")
+    assert rep.stop_reason == "end" and [t["phase"] for t in tel.ticks].count("hold") >= 2
+    assert min(t["late"] for t in tel.ticks) > -1e-3  # no tick before its deadline
+    assert rep.figures.jitter_max_ms < 0.5 * 50.0 or rep.figures.overruns > 0
+
+
 def _streaming_process(tmp_path: Path, sig: int) -> tuple[subprocess.Popen, str, str, Path]:
     """Start 'motion2robot stream --virtual --loop', wait for 50 ticks of telemetry, send ``sig``."""
     from motion2robot.robot import load_robot

@@ -238,16 +238,16 @@ class Streamer:
             if phase == "hold":
                 if hold_until is None:
                     hold_until = now + self.policy.on_end
+                elif now >= hold_until:  # the hold is over: no tick off the schedule, a last state read
+                    if self.bus is not None:
+                        self._check_state(STATE_REGISTERS)  # never "end" with servos that stopped obeying
+                    return "end"
                 target, ramp = None, False
             self._tick(target, ramp, phase, t0)
             if phase == "ramp_in" and self.guard.reached(self.traj[0]):
                 phase, play_k0 = "play", self.k + 1
             elif phase == "ramp_out" and self.guard.reached(self.rest):
                 phase = "hold"
-            elif phase == "hold" and hold_until is not None and now >= hold_until:
-                if self.bus is not None:
-                    self._check_state(STATE_REGISTERS)  # never "end" with servos that stopped obeying
-                return "end"
             until = hold_until
             self._wait_next(t0, lambda: bool(sig.count) or (until is not None and clock() >= until))
 
