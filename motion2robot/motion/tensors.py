@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+import re
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +25,12 @@ def to_numpy(t: Any) -> np.ndarray:
     if hasattr(t, "cpu"):
         t = t.cpu()
     if hasattr(t, "numpy"):
-        return np.asarray(t.numpy())
+        try:
+            return np.asarray(t.numpy())
+        except TypeError:  # a dtype numpy lacks (torch's bfloat16): widen to float32 first
+            if not hasattr(t, "float"):
+                raise
+            return np.asarray(t.float().numpy())
     return np.asarray(t)
 
 
@@ -69,6 +76,11 @@ def read_pt(path: Path, opts: ReadOptions) -> list[HumanMotion]:
         raise fail(path, "is a torch .pt file but torch is not installed", _TORCH_HINT) from None
     try:
         obj = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as err:  # weights_only refused a Python object: never run it
+        found = re.search(r"unsupported GLOBAL (\S+)", str(err))
+        what = f" ({found.group(1).rstrip('.,')})" if found else ""
+        raise fail(path, f"holds Python objects{what} beside tensors, which are not loaded (no code from a "
+                   "file is run)", "save the motion tensor itself: torch.save(tensor, path)") from None
     except Exception as err:  # torch raises many types for bad files
         raise fail(path, f"could not be loaded by torch ({type(err).__name__}: {err})",
                    "save the tensor with torch.save") from None
