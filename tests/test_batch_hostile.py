@@ -37,7 +37,7 @@ def test_non_utf8_names_and_special_files_each_get_a_row_and_resume_works(tmp_pa
     out.read_bytes().decode("utf-8")  # the file stays valid UTF-8
     errors = {os.path.basename(r["key"].split("#")[0]): r["error"] for r in rows}
     assert "FIFO" in errors["fifo.npy"] and "is a directory" in errors["dir.npy"]
-    assert "broken symbolic link" in errors["gone.npy"]
+    assert "broken symbolic link" in errors["broken.npy"]  # the row names the link, not its missing target
     assert any(k.encode("utf-8", "surrogateescape") == b"caf\xe9.npy" for k in errors)
     capsys.readouterr()
     assert main(argv) == 0  # the second run resumes: nothing to do, nothing duplicated

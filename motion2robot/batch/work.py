@@ -186,7 +186,8 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
     errors: dict[str, str] = {}
     seen: set[str] = set()
     for f, explicit, why in _walk([Path(p).expanduser() for p in inputs], True, set()):
-        path = str(f.resolve())
+        # a dangling link is named by itself (its target is not there); other paths by their real file
+        path = str(f.absolute() if f.is_symlink() and not f.exists() else f.resolve())
         if path in seen:
             continue
         seen.add(path)
