@@ -10,6 +10,8 @@ and runs the full ``check`` with the physics playback. Prints per clip and in to
 - keypoint error (mm, mean over frames) and root path error (robot metres, mean) against the
   kinematic-only retarget of the same clip;
 - the failing checks and how often each fails;
+- the quasi-static clips (pelvis within 0.5 m of its start): how many keep the tempo (x1.00) and
+  how much keypoint error they lose against the kinematic-only retarget (the target: < 20 %);
 - retargeting speed in frames per CPU second, beside the kinematic-only figure (same run);
 - artefacts: the chosen tempo and legs retargeted again at 100 fps, whose peak root and joint
   accelerations must stay within 1.5x of the native rate's (``--no-artefacts`` skips it), and
@@ -67,6 +69,17 @@ def peak_accelerations(motion) -> tuple[float, float]:
     return float(np.abs(acc[:, :3]).max()), float(np.abs(acc[:, 7:]).max())
 
 
+#: m; a clip whose pelvis stays within this of its start (horizontally) is quasi-static: stand, wave,
+#: bow, squat, reach, turn in place (the issue's list), not walks.
+QUASI_STATIC_REACH = 0.5
+
+
+def quasi_static(human) -> bool:
+    """The human pelvis never leaves a 0.5 m circle around its first position (canonical: z up)."""
+    p = np.asarray(human.positions)[:, 0, :2]
+    return bool(np.linalg.norm(p - p[0], axis=1).max() < QUASI_STATIC_REACH)
+
+
 def edge_only(report, frames: int) -> list[str]:
     """Checks that fail only within the first or last 2 frames."""
     ends = set(range(2)) | set(range(frames - 2, frames))
@@ -112,6 +125,7 @@ def main() -> int:
             "clip": name, "frames": human.num_frames, "feasible": rep.feasible, "stays_up": not roll.get("fell", False),
             "tempo": float(motion.meta.get("tempo", 1.0)), "fallback": motion.meta.get("fallback"),
             "kp_mm": keypoint_error_mm(motion), "failed": failed, "reasons": rep.reasons,
+            "quasi_static": quasi_static(human),
         }
         if base is not None:
             row["kp_base_mm"] = keypoint_error_mm(base)
@@ -150,6 +164,14 @@ def main() -> int:
         print(f"keypoint error: {kp.mean():.1f} mm (kinematic-only {kb.mean():.1f} mm, {100 * (kp.mean() / kb.mean() - 1):+.0f} %); "
               f"root path vs kinematic-only: mean {pe.mean() * 100:.1f} cm, max {pe.max() * 100:.1f} cm")
         print(f"speed: {frames_total / cpu_new:,.0f} frames per CPU second (kinematic-only {frames_total / cpu_base:,.0f}, same run)")
+        qs = [r for r in ok if r["quasi_static"]]
+        if qs:
+            loss = np.array([r["kp_mm"] / max(r["kp_base_mm"], 1e-9) - 1.0 for r in qs])
+            worst = max(qs, key=lambda r: r["kp_mm"] / max(r["kp_base_mm"], 1e-9))
+            print(f"quasi-static clips (pelvis within {QUASI_STATIC_REACH} m of its start): {len(qs)}; at tempo x1.00: "
+                  f"{sum(r['tempo'] == 1.0 for r in qs)}/{len(qs)}; keypoint error vs kinematic-only: median "
+                  f"{100 * np.median(loss):+.0f} %, worst {100 * loss.max():+.0f} % ({worst['clip']}); "
+                  f"losing >= 20 %: {int((loss >= 0.2).sum())}")
     else:
         print(f"keypoint error: {kp.mean():.1f} mm; speed: {frames_total / cpu_new:,.0f} frames per CPU second")
     edges = [r["clip"] for r in ok if r["edge_only"]]
