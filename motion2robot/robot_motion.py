@@ -18,7 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from motion2robot.errors import InputFileError
-from motion2robot.util.files import special_file
+from motion2robot.util.files import UNREADABLE_FIX, special_file, unreadable
 from motion2robot.util.jsonable import plain
 
 NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
@@ -99,15 +99,20 @@ class RobotMotion:
         except OSError as err:
             raise InputFileError(f"{path}: cannot create its folder ({err.strerror}); choose another output path") from None
         tmp = path.with_name(path.name + ".part.npz")
-        np.savez(
-            tmp,
-            qpos=self.qpos,
-            fps=np.float64(self.fps),
-            joint_names=np.array(self.joint_names, dtype=str),
-            robot=np.array(self.robot, dtype=str),
-            meta=np.array(json.dumps(plain(self.meta)), dtype=str),
-        )
-        tmp.replace(path)
+        try:
+            np.savez(
+                tmp,
+                qpos=self.qpos,
+                fps=np.float64(self.fps),
+                joint_names=np.array(self.joint_names, dtype=str),
+                robot=np.array(self.robot, dtype=str),
+                meta=np.array(json.dumps(plain(self.meta)), dtype=str),
+            )
+            tmp.replace(path)
+        except PermissionError:
+            tmp.unlink(missing_ok=True)
+            raise InputFileError(f"{path}: cannot be written (permission denied); choose another output path, "
+                                 "or fix the permissions of its folder") from None
         return path
 
     @classmethod
@@ -121,6 +126,9 @@ class RobotMotion:
         special = special_file(path)
         if special is not None:  # a FIFO would block np.load for ever
             raise InputFileError(f"{path}: {special}, not a robot motion .npz; give the file made by 'motion2robot retarget'")
+        denied = unreadable(path)
+        if denied is not None:
+            raise InputFileError(f"{path}: {denied}; {UNREADABLE_FIX}")
         try:
             z = np.load(path, allow_pickle=False)
             if not isinstance(z, np.lib.npyio.NpzFile):

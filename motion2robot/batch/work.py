@@ -30,7 +30,7 @@ from numpy.lib import format as npformat
 from motion2robot.batch.layouts import duplicate_outputs
 from motion2robot.errors import UserError
 from motion2robot.motion.formats import SCAN_SUFFIXES, SINGLE_CLIP_SUFFIXES
-from motion2robot.util.files import special_file
+from motion2robot.util.files import UNREADABLE_FIX, special_file, unreadable
 
 #: Extensions picked up when a folder is expanded (the format table's).
 MOTION_EXTENSIONS = SCAN_SUFFIXES
@@ -198,6 +198,9 @@ def expand_inputs(inputs: Sequence[str | Path], read_options: Mapping[str, Any] 
             special = special_file(f)
             if special is not None:
                 raise UserError(f"{f}: {special}, not a motion file; remove it or give a regular file")
+            denied = unreadable(f)
+            if denied is not None:
+                raise UserError(f"{f}: {denied}; {UNREADABLE_FIX}")
             if not f.is_file():
                 raise UserError(f"{f}: no such file; fix the manifest entry")
             try:

@@ -4,7 +4,8 @@ Each subcommand lives in its own module ``motion2robot/cli/cmd_<name>.py`` expos
 ``register(subparsers) -> None``; the module adds its parser and sets ``func=handler`` with
 ``handler(args) -> int``. This module finds them, runs the chosen one, and owns the error
 convention: a :class:`~motion2robot.errors.UserError` becomes one line on stderr and exit code 2
-(traceback only with ``--debug``); Ctrl-C exits 130.
+(traceback only with ``--debug``), and so does a PermissionError (a file or folder the user may
+not read or write, wherever it is met); Ctrl-C exits 130.
 """
 
 from __future__ import annotations
@@ -95,6 +96,13 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except PermissionError as err:  # a file or folder this user may not read or write: never a bug
+        if debug:
+            traceback.print_exc()
+        where = err.filename or "a file or folder"
+        print(f"motion2robot: error: {where}: permission denied; check its permissions (or those of its folder) "
+              "or choose another path", file=sys.stderr)
+        return 2
     except Exception as err:  # a bug, not bad input: still one line unless --debug
         if debug:
             raise

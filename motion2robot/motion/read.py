@@ -19,7 +19,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.options import ReadOptions
 from motion2robot.motion.probe import Probe
 from motion2robot.motion.safe_pickle import load_npy, read_npy_data, read_npy_header
-from motion2robot.util.files import special_file
+from motion2robot.util.files import UNREADABLE_FIX, special_file, unreadable
 
 _NPY_FORMATS = tuple(f.name for f in TABLE if f.npy)
 
@@ -39,6 +39,9 @@ def _refuse_special(path: Path) -> None:
     what = special_file(path)
     if what is not None and what != "is a directory":
         raise fail(path, f"{what}, not a motion file", "give a regular motion file")
+    what = unreadable(path)
+    if what is not None:
+        raise fail(path, what, UNREADABLE_FIX)
 
 
 def detect_format(path: str | Path) -> str:
@@ -105,6 +108,7 @@ def _read_npy_once(path: Path, fmt: str | None, opts: ReadOptions) -> list[Human
 
 
 def _read_path(path: Path, fmt: str | None, opts: ReadOptions) -> list[HumanMotion]:
+    _refuse_special(path)  # a file of a folder: it may be unreadable too
     fast = _read_npy_once(path, fmt, opts)
     if fast is not None:
         return fast

@@ -1,5 +1,6 @@
 """What a path is when it is not a regular file: a reader must not open a FIFO (it blocks for
-ever) nor a device, and a batch gives such entries an error row."""
+ever) nor a device, and a batch gives such entries an error row. A regular file this process may
+not open (permissions) is named as such, not left to the reader's traceback."""
 
 from __future__ import annotations
 
@@ -23,3 +24,22 @@ def special_file(path: str | Path) -> str | None:
         if test(st.st_mode):
             return what
     return None
+
+
+def unreadable(path: str | Path) -> str | None:
+    """"cannot be read (Permission denied)" for an existing regular file this process may not
+    open; None otherwise (also for special or missing files: see :func:`special_file`)."""
+    if special_file(path) is not None or not os.path.isfile(path):
+        return None
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except FileNotFoundError:
+        return None
+    except OSError as err:
+        return f"cannot be read ({err.strerror})"
+    os.close(fd)
+    return None
+
+
+#: The fix to name with :func:`unreadable`.
+UNREADABLE_FIX = "check the file's permissions (e.g. chmod u+r) or read it as its owner"
