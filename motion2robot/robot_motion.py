@@ -129,22 +129,26 @@ class RobotMotion:
         denied = unreadable(path)
         if denied is not None:
             raise InputFileError(f"{path}: {denied}; {UNREADABLE_FIX}")
+        from motion2robot.motion.archive import read_npz_members
+
         try:
-            z = np.load(path, allow_pickle=False)
-            if not isinstance(z, np.lib.npyio.NpzFile):
-                raise InputFileError(f"{path}: is a single array (.npy), not a robot motion .npz; human motion "
-                                     "must be retargeted first: 'motion2robot retarget'")
-            with z:
-                missing = [k for k in NPZ_KEYS if k not in z.files]
-                if missing:
-                    raise InputFileError(
-                        f"{path}: not a robot motion (missing {', '.join(missing)}); "
-                        "make one with 'motion2robot retarget'")
-                qpos = np.asarray(z["qpos"], dtype=np.float64)
-                fps = float(z["fps"])
-                names = tuple(str(n) for n in z["joint_names"].tolist())
-                robot = str(z["robot"])
-                meta = json.loads(str(z["meta"]))
+            if not zipfile.is_zipfile(path):
+                with open(path, "rb") as fh:
+                    if fh.read(6) == b"\x93NUMPY":
+                        raise InputFileError(f"{path}: is a single array (.npy), not a robot motion .npz; human "
+                                             "motion must be retargeted first: 'motion2robot retarget'")
+                raise InputFileError(f"{path}: is not an .npz archive; give the file made by 'motion2robot retarget'")
+            z = read_npz_members(path, NPZ_KEYS)  # capped, no pickle
+            missing = [k for k in NPZ_KEYS if k not in z]
+            if missing:
+                raise InputFileError(
+                    f"{path}: not a robot motion (missing {', '.join(missing)}); "
+                    "make one with 'motion2robot retarget'")
+            qpos = np.asarray(z["qpos"], dtype=np.float64)
+            fps = float(z["fps"])
+            names = tuple(str(n) for n in z["joint_names"].tolist())
+            robot = str(z["robot"])
+            meta = json.loads(str(z["meta"]))
         except InputFileError:
             raise
         except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, json.JSONDecodeError, KeyError) as err:

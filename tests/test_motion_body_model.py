@@ -165,5 +165,5 @@ def test_bad_body_model_is_one_line_exit_2(tmp_path: Path, capsys, case: str) ->
     assert main(["inspect", str(tmp_path / "amass.npz"), "--body-model", str(bad)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("motion2robot: error:") and err.count("\n") == 1 and str(bad) in err
-    assert {"missing": "missing J_regressor", "object_npz": "pickled objects", "pickle_code": "refused",
+    assert {"missing": "missing J_regressor", "object_npz": "object arrays (pickled", "pickle_code": "refused",
             "bad_tree": "kintree_table"}[case] in err

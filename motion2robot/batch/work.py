@@ -123,10 +123,11 @@ def count_clips(path: Path, read_options: Mapping[str, Any] | None = None) -> in
         if isinstance(obj, dict) and "pose" in obj:  # an editor's result: edited, source, target
             return sum(k in obj for k in ("pose", "pose_source", "pose_target"))
         return 1
-    if ext == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            key = next((k for k in ("joints", "positions") if k in z.files), None)
-            return _count_array(z[key].shape) if key else 1
+    if ext == ".npz":  # from the member's header: nothing decompressed, a bomb refused
+        from motion2robot.motion.archive import npz_member_shape
+
+        shape = npz_member_shape(path, "joints") or npz_member_shape(path, "positions")
+        return _count_array(shape) if shape else 1
     from motion2robot.motion import read_motion  # .pt and unknown formats: read once
 
     return len(read_motion(path, **dict(read_options or {})))

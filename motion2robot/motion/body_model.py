@@ -13,7 +13,6 @@ Frames: the model's own (SMPL: y up, facing +z, subject's left +x), metres.
 
 from __future__ import annotations
 
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,25 +36,22 @@ class BodyModel:
     approximate: bool = False
 
 
-def _arrays(path: Path) -> dict:
+def _arrays(path: Path) -> tuple[dict, list[str]]:
+    """The arrays a body model needs, and the names of everything the file holds."""
     with open(path, "rb") as fh:
         magic = fh.read(4)
-    if magic.startswith(b"PK"):
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                return {k: z[k] for k in z.files}
-        except ValueError as err:  # an object array: would need pickle
-            raise fail(path, f"holds pickled objects ({err}); refused, body models are read as numpy arrays "
-                             "only", "re-save the model's arrays with numpy.savez") from None
-        except (zipfile.BadZipFile, OSError) as err:
-            raise fail(path, f"is a damaged .npz ({err})", _FIX) from None
+    if magic.startswith(b"PK"):  # only the needed members are read (capped, no pickle)
+        from motion2robot.motion.archive import read_npz_members
+
+        members = read_npz_members(path, (*REQUIRED_KEYS, "shapedirs"))
+        return dict(members), members.names
     from motion2robot.motion.safe_pickle import restricted_load
 
     with open(path, "rb") as fh:
         obj = restricted_load(path, fh)
     if not isinstance(obj, dict):
         raise fail(path, f"holds a {type(obj).__name__}, not a body-model dict", _FIX)
-    return obj
+    return obj, sorted(map(str, obj))
 
 
 def load_body_model(path: str | Path, betas: np.ndarray | None = None) -> BodyModel:
@@ -63,10 +59,10 @@ def load_body_model(path: str | Path, betas: np.ndarray | None = None) -> BodyMo
     path = Path(path)
     if not path.is_file():
         raise fail(path, "--body-model file not found", _FIX)
-    d = _arrays(path)
+    d, names = _arrays(path)
     missing = [k for k in REQUIRED_KEYS if k not in d]
     if missing:
-        raise fail(path, f"is missing {', '.join(missing)} (keys: {', '.join(sorted(map(str, d))[:10])})", _FIX)
+        raise fail(path, f"is missing {', '.join(missing)} (keys: {', '.join(names[:10])})", _FIX)
     try:
         v = np.asarray(d["v_template"], dtype=np.float64)
         jr = np.asarray(d["J_regressor"], dtype=np.float64)

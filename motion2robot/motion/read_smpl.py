@@ -113,9 +113,10 @@ def read_amass(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     """AMASS SMPL-H / SMPL-X parameter .npz (z up)."""
     if opts.clip not in (None, 0, -1):
         raise fail(path, f"holds one clip, --clip {opts.clip} is out of range", "pass --clip 0 or omit it")
-    with np.load(path, allow_pickle=False) as z:
-        d = {k: z[k] for k in z.files if k in ("poses", "trans", "betas", "root_orient", "pose_body",
-                                                  "mocap_framerate", "mocap_frame_rate")}
+    from motion2robot.motion.archive import read_npz_members
+
+    d = dict(read_npz_members(path, ("poses", "trans", "betas", "root_orient", "pose_body", "mocap_framerate",
+                                     "mocap_frame_rate")))
     if "poses" in d:
         poses = np.asarray(d["poses"], dtype=np.float64)
     elif "root_orient" in d and "pose_body" in d:

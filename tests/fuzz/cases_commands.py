@@ -42,10 +42,18 @@ case("stream: motion of an unknown robot")(lambda d: ["stream", str(robot_npz(d,
                                                       str(d / "t.jsonl")])
 case("stream: motion meta not JSON")(lambda d: ["stream", str(robot_npz(d, meta="{")), *STREAM, str(d / "t.jsonl")])
 case("stream: human motion")(lambda d: ["stream", str(npy(d, J)), *STREAM, str(d / "t.jsonl")])
+case("stream: robot motion whose qpos expands to 528 MB")(lambda d: ["stream", str(_qpos_bomb(d)), *STREAM,
+                                                                      str(d / "t.jsonl")])
 case("stream: npz without qpos")(lambda d: ["stream", str(npz(d, joints=J, fps=20.0)), *STREAM, str(d / "t.jsonl")])
 case("stream: missing file")(lambda d: ["stream", str(d / "none.npz"), *STREAM, str(d / "t.jsonl")])
 case("stream: no target")(lambda d: ["stream", str(good_robot_npz(d))])
 case("stream: --telemetry is a directory")(lambda d: ["stream", str(good_robot_npz(d)), "--dry-run", "--telemetry", str(d)])
+
+
+def _qpos_bomb(d: Path) -> Path:
+    from tests.fuzz.cases_files import _bomb
+
+    return _bomb(d, "qpos", (4_888_889, 27))  # 528 MB of float32
 
 
 def _stream_opt(*opts: str) -> Callable[[Path], list[str]]:

@@ -147,16 +147,29 @@ def _member_text(d: Path) -> list[str]:
 case("npz: member is text")(_member_text)
 
 
-def _bomb(d: Path) -> list[str]:
+def _bomb(d: Path, member: str = "joints", shape: tuple[int, ...] = (2_000_000, 22, 3)) -> Path:
+    """Issue 20's archive: 2.3 MB that expands to 528 MB of float32 zeros (deflate level 1)."""
     p = d / "bomb.npz"
-    with zipfile.ZipFile(p, "w", compression=zipfile.ZIP_DEFLATED) as z:
+    with zipfile.ZipFile(p, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1) as z:
         buf = io.BytesIO()
-        np.lib.format.write_array_header_1_0(buf, {"descr": "<f4", "fortran_order": False, "shape": (3_000_000, 22, 3)})
-        with z.open("joints.npy", "w", force_zip64=True) as m:
+        np.lib.format.write_array_header_1_0(buf, {"descr": "<f4", "fortran_order": False, "shape": shape})
+        with z.open(f"{member}.npy", "w", force_zip64=True) as m:
             m.write(buf.getvalue())
-            chunk = b"\0" * (1 << 20)
-            for _ in range(3_000_000 * 66 * 4 // len(chunk)):
-                m.write(chunk)
+            left, chunk = int(np.prod(shape)) * 4, bytes(1 << 22)
+            while left:
+                m.write(chunk[: min(left, len(chunk))])
+                left -= min(left, len(chunk))
+        z.writestr("fps.npy", _npy_bytes(np.asarray(20.0)))
+    return p
+
+
+def _liar(d: Path) -> list[str]:
+    """A member whose header promises 2.6 TB and that holds 4 kB."""
+    p = d / "liar.npz"
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f4", "fortran_order": False, "shape": (10**10, 22, 3)})
+    with zipfile.ZipFile(p, "w") as z:
+        z.writestr("joints.npy", buf.getvalue() + bytes(4096))
         z.writestr("fps.npy", _npy_bytes(np.asarray(20.0)))
     return inspect(p)
 
@@ -167,7 +180,8 @@ def _npy_bytes(a: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-case("npz: member expands to 790 MB")(_bomb)
+case("npz: 2.3 MB expanding to 528 MB")(lambda d: inspect(_bomb(d)))
+case("npz: member header promises 2.6 TB")(_liar)
 # SMPL parameters read with an approximate skeleton and a warning; --strict refuses them without a model
 case("npz: SMPL parameters under --strict")(lambda d: inspect(npz(d, poses=np.zeros((30, 156)), trans=np.zeros((30, 3)),
                                                                   mocap_framerate=np.asarray(60.0)), "--strict"))
