@@ -140,3 +140,20 @@ def test_cli_bad_iterations_is_a_usage_error(bad, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["retarget", "x.npy", "--iterations", bad])
     assert exc.value.code == 2 and "--iterations" in capsys.readouterr().err
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_the_work(tmp_path, capsys):
+    """Issue 20: '-o' pointing at a directory was found after the solve (exit 3, a .part file left
+    behind). A clip whose feet never touch the floor would fail the solve: the -o error comes first."""
+    from tests.test_motion_support import walking_yup
+
+    np.save(tmp_path / "m.npy", walking_yup(30))
+    (tmp_path / "outdir").mkdir()
+    (tmp_path / "afile").write_text("x")
+    for out, words in ((tmp_path / "outdir", f"{tmp_path / 'outdir'}: is a directory; give a file name for the "
+                                             f"robot motion, e.g. {tmp_path / 'outdir' / 'out.npz'}"),
+                       (tmp_path / "afile" / "o.npz", "cannot create its folder for the robot motion")):
+        assert main(["retarget", str(tmp_path / "m.npy"), "-o", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("motion2robot: error: ") and words in err[0], err
+    assert not list(tmp_path.rglob("*.part*")) and not any((tmp_path / "outdir").iterdir())

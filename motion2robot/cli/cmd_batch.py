@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from motion2robot.batch.results import batch_lock
     from motion2robot.util.output import output_path
 
-    output_path(args.out, "results file")
+    output_path(args.out, "results file", ".jsonl")
     robot, read_options = check_worker_args(args)  # fail fast (exit 2) on an unknown robot
     with batch_lock(args.out):  # before the plan reads or --redo rewrites the results file
         return _run_locked(args, robot, read_options, tqdm)

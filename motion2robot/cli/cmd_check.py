@@ -40,9 +40,9 @@ def run(args: argparse.Namespace) -> int:
 
     from motion2robot.util.output import output_path
 
-    for out, what in ((args.json, "JSON report"), (args.html, "HTML report")):
+    for out, what, suffix in ((args.json, "JSON report", ".json"), (args.html, "HTML report", ".html")):
         if out:
-            output_path(out, what)  # before the work: a directory here is a user error
+            output_path(out, what, suffix)  # before the work: a directory here is a user error
     motion, robot, human = load_motion_input(args.file, args)
     report = check(motion, robot, CheckOptions(physics=args.physics, **check_option_kwargs(args)))
     print(verdict_table(report))

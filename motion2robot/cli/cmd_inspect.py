@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
 
         from motion2robot.util.output import output_path
 
-        out = output_path(args.plot, "plot")
+        out = output_path(args.plot, "plot", ".png")
         m = clips[0]
         prompt = m.meta.get("prompt")
         title = f"{Path(args.file).name} clip {m.meta.get('clip', 0)}" + (f": {prompt}" if prompt else "")

@@ -15,6 +15,7 @@ from pathlib import Path
 from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.cli.retarget_options import add_retarget_options, retarget_options_from, tempo_line
 from motion2robot.errors import InputFileError, UserError
+from motion2robot.util.output import output_path
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -80,12 +81,14 @@ def run(args: argparse.Namespace) -> int:
 
     clip = _clip_arg(args.clip)
     robot = load_robot(args.robot)
+    out = _output(args, robot.name)
+    if args.output:  # a directory or a folder that cannot be made: said before the work, not after it
+        output_path(out, "robot motion", ".npz")
     clips = read_motion(args.input, clip=None if clip in (None, "all") else clip, **read_args_kwargs(args))
     if not clips:
         raise InputFileError(f"{args.input}: no motion clip found; check the file")
     if len(clips) > 1 and clip is None:
         raise UserError(f"{args.input}: holds {len(clips)} clips; choose one with --clip 0..{len(clips) - 1} or --clip all")
-    out = _output(args, robot.name)
     options = retarget_options_from(args, RetargetOptions(fps=args.out_fps))
     if args.iterations:
         options = replace(options, iterations=args.iterations)

@@ -96,7 +96,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     from motion2robot.util.output import output_path
 
     robot, sm = _servo_map(args.robot)
-    output_path(args.output, "calibration file")
+    output_path(args.output, "calibration file", ".json")
     target = target_from_args(args, sm)
     hinge = {n: i for i, n in enumerate(robot.joint_names)}
     nominal = {s.joint: float(robot.nominal_qpos[7 + hinge[s.joint]]) for s in sm.servos if s.joint in hinge}

@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     hinge = {n: i for i, n in enumerate(robot.joint_names)}
     rest = None if args.rest == "last" else np.array([robot.nominal_qpos[7 + hinge[j]] for j in cal.joints])
     telemetry = str(output_path(args.telemetry or str(Path(args.motion).with_suffix("")) + ".telemetry.jsonl",
-                                "telemetry"))
+                                "telemetry", ".jsonl"))
     limits = JointLimits.from_robot(robot)
     if args.dry_run:
         report = stream_motion(motion, limits, servo_map, None, rate_hz=args.rate, loop=args.loop, dry_run=True,
