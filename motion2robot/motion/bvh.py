@@ -148,8 +148,8 @@ def parse_bvh(path: str | Path, strict: bool = False) -> BvhClip:
                          f"channels ('Frames: {n_frames}'), not a whole number", "re-export the file")
     if n_frames != rows:  # trust the data, not the header, and say so
         what = f"'Frames: {n_frames}' but the MOTION data holds {rows} frames of {n_ch} channels"
-        if strict or n_frames < 0:
-            raise fail(path, what, "fix the 'Frames:' line" + (" (or drop --strict to read the rows)" if strict else ""))
+        if strict:
+            raise fail(path, what, "fix the 'Frames:' line (or drop --strict to read the rows)")
         warnings.warn(InputWarning(f"{path}: {what}; reading all {rows} frames (--strict refuses such files)"),
                       stacklevel=2)
     if not (math.isfinite(frame_time) and frame_time > 0):
@@ -158,7 +158,7 @@ def parse_bvh(path: str | Path, strict: bool = False) -> BvhClip:
     bad = ~np.isfinite(values) | (np.abs(values) > MAX_COORDINATE)
     if bad.any():
         t, c = (int(x) for x in np.argwhere(bad)[0])
-        raise fail(path, f"frame {t}, channel {c + 1} of the MOTION data is {values[t, c]!r} (not finite or beyond "
+        raise fail(path, f"frame {t}, channel {c + 1} of the MOTION data is {values[t, c]:g} (not finite or beyond "
                          f"{MAX_COORDINATE:g}; {int(bad.any(axis=1).sum())} frame(s) in all)",
                    "fix or trim those frames in the source")
     return BvhClip(skel, frame_time, values)
