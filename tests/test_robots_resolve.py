@@ -145,3 +145,17 @@ def test_offline_without_root_and_without_cache(tmp_path, monkeypatch):
         load_robot("menagerie:unitree_h1")
     msg = _one_line(e)
     assert "cannot fetch the model" in msg and "set MENAGERIE_ROOT" in msg and ".toml beside it" in msg
+
+
+def test_a_servo_for_a_joint_the_model_does_not_have_names_the_config(tmp_path):
+    """Issue 20: a servo ID for a joint that does not exist was accepted by 'robots show' and
+    'retarget'; 'stream' then blamed the motion and suggested retargeting it."""
+    op3 = robots_dir() / "op3"
+    text = (op3 / "op3.toml").read_text().replace('mjcf = "op3.xml"', f'mjcf = "{op3 / "op3.xml"}"')
+    assert "r_sho_pitch = 1" in text
+    p = tmp_path / "bot.toml"
+    p.write_text(text.replace("r_sho_pitch = 1", "r_tail = 1"))
+    with pytest.raises(RobotConfigError) as e:
+        load_robot(str(p))
+    msg = _one_line(e)
+    assert msg.startswith(f"{p}: [servos.ids] names r_tail, not hinge joints of the model") and "r_sho_pitch" in msg

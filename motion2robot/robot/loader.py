@@ -110,6 +110,12 @@ def _apply_joint_ranges(spec: mujoco.MjSpec, config: RobotConfig, where: str) ->
     bad_nominal = sorted(set(config.nominal) - names)
     if bad_nominal:
         raise RobotConfigError(f"{where}: [nominal] names {', '.join(bad_nominal)}, not joints of the model")
+    hinges = [j.name for j in spec.joints if j.type == _HINGE]
+    bad_servos = sorted({s.joint for s in config.servos.servos} - set(hinges)) if config.servos else []
+    if bad_servos:
+        more = ", ..." if len(hinges) > 8 else ""
+        raise RobotConfigError(f"{where}: [servos.ids] names {', '.join(bad_servos)}, not hinge joints of the model; "
+                               f"use the model's joint names ({', '.join(hinges[:8])}{more})")
     for j in spec.joints:
         if j.type != _HINGE:
             continue
