@@ -65,7 +65,7 @@ def test_the_target_is_still_reached_in_the_time_the_limit_allows(velocity, rate
 
 
 def test_slow_limits_of_the_issue_hold_on_average():
-    """0.05 rad/s at 100 Hz (0.033 ticks per control tick) and a 0.1 rad/s ramp: over 3 s the goal
+    """0.05 rad/s at 100 Hz (0.33 ticks per control tick) and a 0.1 rad/s ramp: over 3 s the goal
     moves 0.15 rad and 0.3 rad at most (+ one tick), where the old rule moved one tick every tick."""
     for velocity, ramp in ((0.05, False), (0.1, True)):
         g = _guard(velocity if not ramp else 5.0, 100.0, ramp_speed=0.1)

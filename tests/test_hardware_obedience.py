@@ -120,7 +120,7 @@ def test_a_watchdog_the_rate_cannot_feed_is_refused_before_anything_is_sent(tmp_
 
 
 def test_sub_tick_velocity_limit_holds_on_the_wire(tmp_path):
-    """0.05 rad/s at 100 Hz is 0.033 ticks per tick: the servos move 0.05 rad/s, not one tick per tick."""
+    """0.05 rad/s at 100 Hz is 0.33 ticks per tick: the servos move 0.05 rad/s, not one tick per tick."""
     slow = JointLimits(LIMITS.names, LIMITS.lower, LIMITS.upper, np.full(N, 0.05))
     q = np.minimum(np.arange(60)[:, None] / 10.0, 1.0) * np.ones(N)  # wants 5 rad/s, 100x the limit
     with VirtualChain(CAL.ids.tolist(), baud=1_000_000, positions=start_at(np.zeros(N))) as chain:

@@ -8,7 +8,7 @@ Rules (all in servo ticks, so what is checked is exactly what goes on the wire):
   ``rate + 1``) and a move spends whole ticks of it. So over any ``n`` control ticks a goal moves
   at most ``rate + 1 + rate * (n - 1) = rate * n + 1`` ticks: the limit times the
   elapsed time plus at most one tick of quantisation, never accumulating; on average exactly the
-  limit. A limit below one tick per control tick (0.05 rad/s at 100 Hz is 0.033 ticks) moves one
+  limit. A limit below one tick per control tick (0.05 rad/s at 100 Hz is 0.33 ticks) moves one
   tick every ``1 / rate`` control ticks;
 - a NaN/inf target holds that joint at its previous goal;
 - start is refused if the present pose is missing/non-finite, outside the limits by more than
