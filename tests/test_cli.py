@@ -36,3 +36,26 @@ def test_unknown_command_exits_2(capsys):
 def test_console_entry_point_runs():
     r = subprocess.run([sys.executable, "-m", "motion2robot", "--version"], capture_output=True, text=True)
     assert r.returncode == 0 and "motion2robot" in r.stdout
+
+
+def _actions(parser, prefix=""):
+    import argparse
+
+    for a in parser._actions:
+        if isinstance(a, argparse._SubParsersAction):
+            for name, sub in a.choices.items():
+                yield from _actions(sub, f"{prefix}{name} ")
+        else:
+            yield prefix.strip(), a
+
+
+def test_every_numeric_option_is_checked_when_parsed():
+    """Issue 20: 'Every numeric option is validated when it is parsed (finite, in range, with units
+    in the message)': no option takes a bare float or int (which accept nan, inf, 0 and negatives),
+    except clip indices, which the readers check against the file's clips."""
+    index_options = {"--clip", "--source-clip", "--edit-clip"}
+    bare = [f"{cmd} {a.option_strings[0]}" for cmd, a in _actions(build_parser())
+            if a.type in (float, int) and not index_options & set(a.option_strings)]
+    assert bare == []
+    typed = [a for _, a in _actions(build_parser()) if getattr(a.type, "__qualname__", "") == "number.<locals>.parse"]
+    assert len(typed) >= 25

@@ -140,7 +140,8 @@ def test_unknown_robot_one_line_exit_2(tmp_path: Path) -> None:
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("args, words", [(["--out", "FILE"], "must be a folder"), (["--jobs", "0"], "--jobs 0")])
+@pytest.mark.parametrize("args, words", [(["--out", "FILE"], "must be a folder"),
+                                         (["--jobs", "0"], "--jobs/-j: must be a whole number of workers in [1, 4096]")])
 def test_bad_options_exit_2(tmp_path: Path, capsys, args: list[str], words: str) -> None:
     clip = tmp_path / "c.npy"
     np.save(clip, np.zeros((5, 22, 3)))
@@ -148,7 +149,11 @@ def test_bad_options_exit_2(tmp_path: Path, capsys, args: list[str], words: str)
     args = [a.replace("FILE", str(tmp_path / "FILE")) for a in args]
     if "--out" not in args:
         args += ["--out", str(tmp_path / "o")]
-    assert main(["score", str(clip), *args, "-q"]) == 2
+    try:
+        code = main(["score", str(clip), *args, "-q"])
+    except SystemExit as e:  # a value refused while the options are parsed
+        code = e.code
+    assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("motion2robot: error: ") and words in err
 

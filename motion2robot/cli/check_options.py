@@ -5,14 +5,16 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from motion2robot.cli.numbers import RATE_HZ, number
+
 #: (flag, CheckOptions field, type, help) of every threshold the command line sets.
 _FLAGS = (
-    ("--slip-speed", "slip_speed", float,
+    ("--slip-speed", "slip_speed", number("m/s", 0.0, 10.0, low_open=True),
      "m/s a planted sole point (or a swing foot near the floor) may move horizontally (default 0.01)"),
-    ("--touch-height", "touch_height", float, "m below which a sole point touches the floor (default 0.002)"),
-    ("--swing-clearance", "swing_clearance", float,
+    ("--touch-height", "touch_height", number("m", 0.0, 0.1, low_open=True), "m below which a sole point touches the floor (default 0.002)"),
+    ("--swing-clearance", "swing_clearance", number("m", 0.0, 1.0, low_open=True),
      "m a moving swing foot keeps above the floor (default: 2%% of the robot's standing root height, 5 mm on the OP3)"),
-    ("--stream-rate", "stream_rate", float,
+    ("--stream-rate", "stream_rate", RATE_HZ,
      "Hz of the playback's servo goals, as 'stream --rate' would send them (default 100)"),
 )
 

@@ -6,6 +6,7 @@ import argparse
 import os
 import sys
 
+from motion2robot.cli.numbers import number
 from motion2robot.cli.worker_options import add_job_options, add_worker_options, batch_config, check_worker_args
 
 
@@ -24,7 +25,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--save-motions", metavar="DIR", help="also save each retargeted robot motion (.npz) here")
     p.add_argument("--redo", action="store_true", help="process every clip again (their old rows are removed)")
     p.add_argument("--redo-errors", action="store_true", help="process again the clips whose row is an error")
-    p.add_argument("--max-tasks-per-child", type=int, metavar="N",
+    p.add_argument("--max-tasks-per-child", type=number("tasks", 1, 10**9, whole=True), metavar="N",
                    help="restart each local worker after N clips (guards against leaks; default: never)")
     p.add_argument("--pairs", action="store_true",
                    help="INPUTS are edit pairs (editor result files, folders of them, or manifests of SOURCE<TAB>EDIT "

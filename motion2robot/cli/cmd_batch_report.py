@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+from motion2robot.cli.numbers import number
+
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
@@ -17,7 +19,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--csv", metavar="OUT.csv", help="write one line per clip as CSV")
     p.add_argument("--html", metavar="OUT.html", help="write a self-contained HTML report")
     p.add_argument("--json", metavar="OUT.json", help="write the summary as JSON ('-' for stdout)")
-    p.add_argument("--top", type=int, default=10, help="how many reasons / slowest clips to list (default 10)")
+    p.add_argument("--top", type=number("lines", 0, 10**6, whole=True), default=10, help="how many reasons / slowest clips to list (default 10)")
     p.set_defaults(func=run)
 
 

@@ -12,6 +12,8 @@ import argparse
 from importlib import resources
 from pathlib import Path
 
+from motion2robot.cli.numbers import RATE_HZ
+
 
 def demo_motion_path() -> Path:
     """The bundled demo motion (HumanML3D joints, made by scripts/make_demo_motion.py)."""
@@ -31,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="keep the results in DIR: robot motion .npz, report .json and .html, stream telemetry")
     p.add_argument("--no-physics", dest="physics", action="store_false", help="skip the physics playback")
     p.add_argument("--no-stream", dest="stream", action="store_false", help="skip streaming to the virtual servos")
-    p.add_argument("--rate", type=float, default=100.0, help="streaming rate in Hz (default 100)")
+    p.add_argument("--rate", type=RATE_HZ, default=100.0, help="streaming rate in Hz (default 100)")
     p.set_defaults(func=run)
 
 

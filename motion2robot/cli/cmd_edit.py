@@ -13,6 +13,7 @@ import json
 import math
 from pathlib import Path
 
+from motion2robot.cli.numbers import number
 from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.cli.retarget_options import add_retarget_options, retarget_options_from
 from motion2robot.errors import InputFileError, UserError
@@ -35,10 +36,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--robot", default="op3", help="robot name or config path (default: op3)")
     p.add_argument("--source-clip", type=int, help="clip of a multi-clip source file")
     p.add_argument("--edit-clip", type=int, help="clip of a multi-clip edited file")
-    p.add_argument("--tolerance", type=float, default=None, metavar="M",
+    p.add_argument("--tolerance", type=number("m", 0.0, 10.0), default=None, metavar="M",
                    help="a body part is unedited in a frame where its joints (relative to the pelvis) move less "
                         "than this between source and edit (metres; default 0.02)")
-    p.add_argument("--blend", type=float, default=None, metavar="S", help="blend length in seconds (default 0.25)")
+    p.add_argument("--blend", type=number("s", 0.0, 60.0), default=None, metavar="S", help="blend length in seconds (default 0.25)")
     p.add_argument("-o", "--out-dir", help="folder for the two robot motions (default: beside the edited file)")
     p.add_argument("--json", metavar="DIFF.json", help="write the diff and both feasibility reports as JSON")
     p.add_argument("--html", metavar="REPORT.html",
@@ -126,9 +127,6 @@ def run(args: argparse.Namespace) -> int:
     from motion2robot.robot import load_robot
     from motion2robot.validate import CheckOptions, check
 
-    for name, v in (("--tolerance", args.tolerance), ("--blend", args.blend)):
-        if v is not None and not (v >= 0 and math.isfinite(v)):
-            raise UserError(f"{name} {v}: give a non-negative number")
     robot = load_robot(args.robot)
     source, edited, where = _pair(args)
     result = retarget_edit(source, edited, robot, retarget_options_from(args),

@@ -12,6 +12,7 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from motion2robot.cli.numbers import FPS
 from motion2robot.cli.read_options import add_read_options, read_args_kwargs
 from motion2robot.cli.retarget_options import add_retarget_options, retarget_options_from, tempo_line
 from motion2robot.errors import InputFileError, UserError
@@ -30,7 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--robot", default="op3", help="op3 (default), menagerie:NAME, or a robot MJCF/TOML path")
     p.add_argument("--clip", default=None, help="clip index of a multi-clip file, or 'all' (one output per clip)")
     p.add_argument("-o", "--output", help="output .npz (default: INPUT stem + '_<robot>.npz' beside the input)")
-    p.add_argument("--fps", dest="out_fps", type=float, metavar="F",
+    p.add_argument("--fps", dest="out_fps", type=FPS, metavar="F",
                    help="frame rate of the robot motion (the human motion is resampled to it first; default: the file's)")
     p.add_argument("--iterations", type=_iterations, metavar="N[,M]", default=None,
                    help="Levenberg-Marquardt iterations of the free-feet and pinned stages (default 3,3: "

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from motion2robot.cli.motion_input import load_motion_input
+from motion2robot.cli.numbers import number
 from motion2robot.cli.read_options import add_read_options
 from motion2robot.cli.retarget_options import add_retarget_options
 from motion2robot.errors import UserError
@@ -36,14 +37,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--render", metavar="OUT", help="render offscreen to OUT (.mp4 or .gif) instead of opening the viewer")
     p.add_argument("--size", default="640x480", help="video size WIDTHxHEIGHT in pixels (default 640x480)")
     p.add_argument("--camera", choices=MODES, default="follow", help="follow the subjects or frame the whole path (default follow)")
-    p.add_argument("--video-fps", type=float, help="video frame rate (default: the motion's, at most 30)")
+    p.add_argument("--video-fps", type=number("frames per second", 1.0, 1000.0), help="video frame rate (default: the motion's, at most 30)")
     p.add_argument("--human", choices=PLACEMENTS, default="beside", help="draw the human skeleton beside the robot, over it, or not")
     p.add_argument("--projected", action="store_true",
                    help="also draw the robot's version in the human's space (blue, over the human skeleton): "
                         "the robot's keypoints mapped back to the human's scale and tempo")
     p.add_argument("--no-check", action="store_true", help="skip the feasibility checks (no failing frames marked)")
     p.add_argument("--once", action="store_true", help="viewer: stop at the last frame instead of looping")
-    p.add_argument("--speed", type=float, default=1.0, help="viewer playback speed (default 1)")
+    p.add_argument("--speed", type=number("x (1 = real time)", 0.0, 100.0, low_open=True), default=1.0, help="viewer playback speed (default 1)")
     p.add_argument("--pretty", action="store_true", help="video: shadows and reflections (slower)")
     add_retarget_options(p)
     add_read_options(p)

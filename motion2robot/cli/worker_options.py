@@ -8,12 +8,14 @@ import argparse
 import os
 from typing import Any
 
+from motion2robot.cli.numbers import number
+
 
 def add_worker_options(p: argparse.ArgumentParser) -> None:
     """--robot, --jobs, --backend, --ray-address, --no-physics, --quiet."""
     p.add_argument("--robot", default="op3", help="robot name (op3, menagerie:unitree_g1, ...) or config path "
                                                   "(default: op3)")
-    p.add_argument("--jobs", "-j", type=int, default=os.cpu_count() or 1,
+    p.add_argument("--jobs", "-j", type=number("workers", 1, 4096, whole=True), default=os.cpu_count() or 1,
                    help="worker processes / Ray CPUs (default: all cores)")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local process pool (default) or Ray tasks (pip install 'motion2robot[ray]')")

@@ -27,6 +27,16 @@ case("retarget: --iterations 0")(lambda d: ["retarget", str(npy(d, J)), "--itera
 case("retarget: --source-fps nan")(lambda d: ["retarget", str(npy(d, J)), "--source-fps", "nan"])
 case("check: --json is a directory")(lambda d: ["check", str(good_robot_npz(d)), "--no-physics", "--json", str(d)])
 case("check: --html is a directory")(lambda d: ["check", str(good_robot_npz(d)), "--no-physics", "--html", str(d)])
+for _v in ("nan", "0", "-20", "inf"):
+    case(f"retarget: --fps {_v}")(lambda d, v=_v: ["retarget", str(npy(d, J)), "--fps", v, "-o", str(d / "o.npz")])
+for _opt, _v in (("--slip-speed", "nan"), ("--touch-height", "-1"), ("--swing-clearance", "inf"), ("--stream-rate", "0")):
+    case(f"check: {_opt} {_v}")(lambda d, o=_opt, v=_v: ["check", str(good_robot_npz(d)), "--no-physics", o, v])
+for _opt, _v in (("--blend", "nan"), ("--blend", "-1"), ("--tolerance", "-1"), ("--tolerance", "inf")):
+    case(f"edit: {_opt} {_v}")(lambda d, o=_opt, v=_v: ["edit", str(npy(d, J)), str(npy(d, J, "e.npy")), o, v])
+for _opt, _v in (("--video-fps", "nan"), ("--video-fps", "0"), ("--speed", "0")):
+    case(f"sim: {_opt} {_v}")(lambda d, o=_opt, v=_v: ["sim", str(good_robot_npz(d)), "--render", str(d / "o.gif"), o, v])
+for _v in ("nan", "0", "-5"):
+    case(f"demo: --rate {_v}")(lambda d, v=_v: ["demo", "--rate", v])
 case("check: robot motion fps 0")(lambda d: ["check", str(robot_npz(d, fps=0.0)), "--no-physics"])
 case("check: robot motion NaN qpos")(lambda d: ["check", str(robot_npz(d, qpos=np.full((20, 27), np.nan))), "--no-physics"])
 
@@ -127,5 +137,8 @@ case("batch: --out is a directory")(lambda d: ["batch", str(npy(d, J)), "--robot
 case("batch: missing input")(lambda d: ["batch", str(d / "none"), "--robot", "op3", "--out", str(d / "r.jsonl")])
 case("batch: --jobs 0")(lambda d: ["batch", str(npy(d, J)), "--robot", "op3", "--out", str(d / "r.jsonl"), "--jobs", "0"])
 case("batch: --jobs abc")(lambda d: ["batch", str(npy(d, J)), "--robot", "op3", "--out", str(d / "r.jsonl"), "--jobs", "x"])
+case("batch: --max-tasks-per-child 0")(lambda d: ["batch", str(npy(d, J)), "--robot", "op3", "--out", str(d / "r.jsonl"),
+                                                 "--max-tasks-per-child", "0"])
+case("batch-report: --top -1")(lambda d: ["batch-report", str(text(d, "r.jsonl", "{}\n")), "--top", "-1"])
 case("batch-report: not JSON lines")(lambda d: ["batch-report", str(text(d, "r.jsonl", "{{{\nnot json\n"))])
 case("batch-report: missing file")(lambda d: ["batch-report", str(d / "none.jsonl")])
