@@ -25,6 +25,7 @@ class Outcome:
     code: int | None
     stderr: str
     handled: bool
+    argv: tuple[str, ...] = ()
 
     def describe(self) -> str:
         return f"{self.case}: exit {self.code}, stderr {self.stderr.strip()[:300]!r}"
@@ -57,4 +58,4 @@ def run_case(case: Case, workdir: Path, timeout_s: int = 60) -> Outcome:
     lines = [ln for ln in text.splitlines() if ln.strip()]
     handled = (code == 2 and len(lines) == 1 and lines[0].startswith("motion2robot: error: ")
                and "internal error" not in lines[0])
-    return Outcome(case.name, code, text, handled)
+    return Outcome(case.name, code, text, handled, tuple(argv))
