@@ -1,7 +1,7 @@
 """Batch survives any file name and any concurrency (issue 20): a file name that is not UTF-8
 made every run fail with exit 3; '--redo' rewrote the results before taking the lock (a
 concurrent batch lost 50 rows); FIFOs, devices, broken links and directories named like motions
-were skipped without a row."""
+were skipped without a row; each gets an error row now."""
 
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ def _folder(tmp_path):
     os.mkfifo(d / "fifo.npy")
     (d / "dir.npy").mkdir()
     os.symlink(tmp_path / "gone.npy", d / "broken.npy")
+    os.symlink("/dev/null", d / "device.npy")  # a device named like a motion
     return d
 
 
@@ -33,15 +34,16 @@ def test_non_utf8_names_and_special_files_each_get_a_row_and_resume_works(tmp_pa
     argv = ["batch", str(d), "--robot", "op3", "--out", str(out), "--no-physics", "-q"]
     assert main(argv) == 0, capsys.readouterr().err
     rows = read_rows(out).rows
-    assert len(rows) == 5
+    assert len(rows) == 6
     out.read_bytes().decode("utf-8")  # the file stays valid UTF-8
     errors = {os.path.basename(r["key"].split("#")[0]): r["error"] for r in rows}
     assert "FIFO" in errors["fifo.npy"] and "is a directory" in errors["dir.npy"]
     assert "broken symbolic link" in errors["broken.npy"]  # the row names the link, not its missing target
+    assert "device.npy: is a character device" in errors["null"]  # keyed by the device, naming the link
     assert any(k.encode("utf-8", "surrogateescape") == b"caf\xe9.npy" for k in errors)
     capsys.readouterr()
     assert main(argv) == 0  # the second run resumes: nothing to do, nothing duplicated
-    assert "5 already in" in capsys.readouterr().err and len(out.read_text().splitlines()) == 5
+    assert "6 already in" in capsys.readouterr().err and len(out.read_text().splitlines()) == 6
 
 
 def test_a_row_with_a_surrogate_name_round_trips():
