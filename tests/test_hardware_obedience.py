@@ -200,6 +200,33 @@ def test_a_watchdog_tripped_by_a_low_rate_is_a_named_fault(tmp_path, capsys, mon
     assert len(tel.ticks) <= 3 and not any(tel.stop["torque"].values())
 
 
+def test_a_stalled_servo_through_the_cli_is_a_named_fault_with_exit_2(tmp_path, capsys, monkeypatch):
+    """Present diverging from the goal, as a user sees it: 'stream --virtual' on a chain whose
+    servo 13 (r_knee) stops moving while it still answers ends in a 'divergence' fault, exit 2."""
+    from motion2robot.robot import load_robot
+
+    start = VirtualChain.__enter__
+
+    def stalling(self):
+        chain = start(self)
+        chain.inject(Fault("stall", 13, after_writes=30))
+        return chain
+
+    monkeypatch.setattr(VirtualChain, "__enter__", stalling)
+    robot = load_robot("op3")
+    q = np.tile(robot.nominal_qpos, (200, 1))
+    q[:, 7:] += 0.6 * np.sin(np.arange(200) / 50.0 * 2 * np.pi)[:, None]  # 0.6 rad at 1 Hz
+    path = RobotMotion(q, 50.0, robot.joint_names, "op3").save(tmp_path / "m.npz")
+    tel_path = tmp_path / "t.jsonl"
+    code = main(["stream", str(path), "--virtual", "--ramp-speed", "4", "--latency-ms", "10", "--rest", "last",
+                 "--telemetry", str(tel_path)])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("motion2robot: error: ")]
+    assert code == 2 and len(err) == 1 and "stream fault (divergence): servo 13 (r_knee)" in err[0], err
+    tel = read_telemetry(tel_path)
+    assert tel.stop["reason"] == "fault" and tel.stop["fault"] == "divergence"
+    assert not any(tel.stop["torque"].values())
+
+
 def _stream_process(tmp_path: Path, *args: str) -> tuple[subprocess.Popen, Path]:
     path = _op3_motion(tmp_path)
     tel_path = tmp_path / "t.jsonl"
