@@ -23,7 +23,6 @@ from __future__ import annotations
 import functools
 
 import casadi as ca
-import mujoco
 import numpy as np
 
 from motion2robot.retarget.problem import HMAX
@@ -41,38 +40,15 @@ MIN_SHIFT = 5e-4
 
 def multibody_zmp(qpos: np.ndarray, fps: float, robot) -> tuple[np.ndarray, np.ndarray]:
     """(zmp (T, 2) with NaN where the robot is not pushed down, com (T, 3)) of a trajectory, by
-    the validator's inverse dynamics (finite differences of ``qpos``): the calls of
-    :func:`~motion2robot.validate.kinematics.compute_kinematics` that the ZMP needs (``mj_rne``
-    and the CoM), without its collision pass."""
-    from motion2robot.validate.dynamics import zmp_of_wrench
-    from motion2robot.validate.kinematics import differentiate
-    from motion2robot.validate.models import check_model
+    the validator's inverse dynamics (finite differences of ``qpos``; no collision pass: the ZMP
+    does not read contacts)."""
+    from motion2robot.robot_motion import RobotMotion
+    from motion2robot.validate.dynamics import root_wrench, zmp_of_wrench
+    from motion2robot.validate.kinematics import compute_kinematics
 
-    m = check_model(robot)
-    d = mujoco.MjData(m)
-    q = np.array(qpos, dtype=np.float64)
-    T = q.shape[0]
-    qvel, qacc = differentiate(q, fps)
-    root = int(robot.root_body)
-    rne = np.empty((T, m.nv))
-    com = np.empty((T, 3))
-    xmat = np.empty((T, 9))
-    kin, com_pos, com_vel, rne_fn = mujoco.mj_kinematics, mujoco.mj_comPos, mujoco.mj_comVel, mujoco.mj_rne
-    d_qpos, d_qvel, d_qacc, d_com, d_xmat = d.qpos, d.qvel, d.qacc, d.subtree_com, d.xmat
-    for t in range(T):
-        d_qpos[:] = q[t]
-        d_qvel[:] = qvel[t]
-        d_qacc[:] = qacc[t]
-        kin(m, d)
-        com_pos(m, d)
-        com_vel(m, d)
-        rne_fn(m, d, 1, rne[t])
-        com[t] = d_com[root]
-        xmat[t] = d_xmat[root]
-    # validate.dynamics.root_wrench: the free joint's rows, the moment turned into world axes
-    wrench = np.concatenate([rne[:, :3], (xmat.reshape(T, 3, 3) @ rne[:, 3:6, None])[..., 0]], axis=1)
-    zmp = zmp_of_wrench(q[:, :3], wrench, 0.05 * robot.mass * GRAVITY)
-    return zmp, com
+    kin = compute_kinematics(RobotMotion(qpos, fps, robot.joint_names, robot.name), robot, collisions=False)
+    zmp = zmp_of_wrench(kin.qpos[:, :3], root_wrench(kin), 0.05 * robot.mass * GRAVITY)
+    return zmp, kin.com
 
 
 @functools.lru_cache(maxsize=1)
