@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.contacts import contact_labels
+from motion2robot.retarget.judged import needs_full_check
 from motion2robot.retarget.stance import has_flight, stance
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
 from motion2robot.robot.robot import Robot
@@ -174,7 +175,8 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
                                     "the upper body and head perform"}
     else:
         meta["fallback"] = None
-    if chosen is None and final.report is not None and judging:  # the full report of what is returned
+    if (chosen is None and final.report is not None and judging
+            and needs_full_check(final.report, check_options)):  # the full report of what is returned
         final = Attempt(final.legs, final.factor, final.motion, _judge_full(robot, check_options)(final.motion))
     if final.report is not None:  # the report speaks of the motion as annotated
         final.report.figures.update(tempo=meta["tempo"], tempo_reason=meta["tempo_reason"], fallback=meta["fallback"])

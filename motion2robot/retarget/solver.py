@@ -166,9 +166,23 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
     return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
 
 
-def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None):
+def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None,
+            rows: np.ndarray | None = None):
     """Per-frame hinge bounds (T, n): the joint limits, tightened to ``max_step`` of the neighbours'
-    current values (never excluding the current value)."""
+    current values (never excluding the current value); with ``rows``, those frames' only
+    (len(rows), n), the same numbers."""
+    if rows is not None:
+        qr = q[rows]
+        lo = np.broadcast_to(lower, qr.shape).copy()
+        hi = np.broadcast_to(upper, qr.shape).copy()
+        if max_step is not None and len(q) > 1:
+            prev, nxt = rows >= 1, rows < len(q) - 1
+            lo[prev] = np.maximum(lo[prev], q[rows[prev] - 1] - max_step)
+            lo[nxt] = np.maximum(lo[nxt], q[rows[nxt] + 1] - max_step)
+            hi[prev] = np.minimum(hi[prev], q[rows[prev] - 1] + max_step)
+            hi[nxt] = np.minimum(hi[nxt], q[rows[nxt] + 1] + max_step)
+            lo, hi = np.minimum(lo, qr), np.maximum(hi, qr)
+        return lo, hi
     lo = np.broadcast_to(lower, q.shape).copy()
     hi = np.broadcast_to(upper, q.shape).copy()
     if max_step is not None and len(q) > 1:
@@ -214,28 +228,29 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
     mu = np.zeros(T)  # per-frame extra damping of the projection step
 
-    def settings(rows: np.ndarray) -> np.ndarray:
-        """The projection's ``lm`` input of frames ``rows``: damping, their hinge box."""
-        return _projection_settings(mu[rows], lo[rows] - slack, hi[rows] + slack, nv)
+    def settings(damping: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """The projection's ``lm`` input of some frames: their damping, their hinge box."""
+        return _projection_settings(damping, lo - slack, hi + slack, nv)
 
     for k in range(iterations + extra):
         rows = np.arange(T) if k < iterations else np.flatnonzero(v_prev > EXTRA_TOLERANCE)
         if not len(rows):
             break
-        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], settings(rows))
+        some = None if k < iterations else rows  # the bounds of the frames stepped only
+        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step, some)
+        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], settings(mu[rows], lo, hi))
         v = v[:, 0]
         worse = v > v_prev[rows]
         mu[rows] = np.where(worse, np.maximum(mu[rows] * 10.0, RETRY_DAMPING), mu[rows] * 0.1)
         if worse.any():  # back to the previous iterate, a damped step from there
             back = rows[worse]
             Q[back], v[worse] = Q_prev[back], v_prev[back]
-            lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], settings(back))[0]
+            lo, hi = _bounds(Q[:, 7:], lower, upper, max_step, some)
+            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], settings(mu[back], lo[worse], hi[worse]))[0]
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
         Q_prev[rows], v_prev[rows] = Q[rows], v
         Q[rows] = apply_step(Q[rows], dx)
-        Q[rows, 7:] = np.clip(Q[rows, 7:], lo[rows], hi[rows])
+        Q[rows, 7:] = np.clip(Q[rows, 7:], lo, hi)
     # the last steps' outcome: a frame made worse goes back
     v = problem.violation_eval(T)(Q, params)[0][:, 0]
     worse = v > v_prev

@@ -40,12 +40,13 @@ MIN_SHIFT = 5e-4
 
 def multibody_zmp(qpos: np.ndarray, fps: float, robot) -> tuple[np.ndarray, np.ndarray]:
     """(zmp (T, 2) with NaN where the robot is not pushed down, com (T, 3)) of a trajectory, by
-    the validator's inverse dynamics (finite differences of ``qpos``)."""
+    the validator's inverse dynamics (finite differences of ``qpos``; no collision pass: the ZMP
+    does not read contacts)."""
     from motion2robot.robot_motion import RobotMotion
     from motion2robot.validate.dynamics import root_wrench, zmp_of_wrench
     from motion2robot.validate.kinematics import compute_kinematics
 
-    kin = compute_kinematics(RobotMotion(qpos, fps, robot.joint_names, robot.name), robot)
+    kin = compute_kinematics(RobotMotion(qpos, fps, robot.joint_names, robot.name), robot, collisions=False)
     zmp = zmp_of_wrench(kin.qpos[:, :3], root_wrench(kin), 0.05 * robot.mass * GRAVITY)
     return zmp, kin.com
 
@@ -86,29 +87,27 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     if T < 3 or not ok.any():
         return np.zeros((T, 2)), np.zeros(T)
     r2, c2, v2 = _second_difference(T)
-    # M = I - (z_c / g) fps^2 D2: the ZMP change per axis is M d
-    mv = np.concatenate([np.ones(T), -(com_z[r2] / GRAVITY) * fps ** 2 * v2])
-    mr, mc = np.concatenate([np.arange(T), r2]), np.concatenate([np.arange(T), c2])
-    by_row = [[] for _ in range(T)]
-    for r, c, v in zip(mr, mc, mv):
-        by_row[r].append((c, v))
-    rr, cc, vv, rhs = [], [], [], []
-    k = 0
-    for t in np.flatnonzero(ok):
-        for n_x, n_y, b in planes[t]:
-            if n_x == 0.0 and n_y == 0.0:
-                continue
-            for c, v in by_row[t]:
-                rr += [k, k]
-                cc += [c, T + c]
-                vv += [n_x * v, n_y * v]
-            rr.append(k)
-            cc.append(2 * T + t)
-            vv.append(-1.0)
-            rhs.append(b - n_x * zmp[t, 0] - n_y * zmp[t, 1])
-            k += 1
+    # M = I - (z_c / g) fps^2 D2: the ZMP change per axis is M d; row t holds (t, 1) then its three
+    # D2 entries (t-1, t, t+1, ends replicated), in this order
+    frames = np.flatnonzero(ok)
+    a = -(com_z[frames] / GRAVITY) * fps ** 2
+    m_col = np.stack([frames, np.maximum(frames - 1, 0), frames, np.minimum(frames + 1, T - 1)], axis=1)
+    m_val = np.stack([np.ones(len(frames)), a * 1.0, a * -2.0, a * 1.0], axis=1)
+    pl = planes[frames]  # (F, HMAX, 3) rows n . p <= b; all-zero normals are padding
+    use = ~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0))
+    fi, hi = np.nonzero(use)  # one constraint per (frame, plane), frame-major as the frames go
+    k = len(fi)
     if not k:
         return np.zeros((T, 2)), np.zeros(T)
+    n_x, n_y, b = pl[fi, hi, 0], pl[fi, hi, 1], pl[fi, hi, 2]
+    kk = np.arange(k)
+    c, v = m_col[fi], m_val[fi]  # (k, 4)
+    # per constraint: (x column, y column) for each of the 4 entries, then its slack
+    rr = np.concatenate([np.repeat(kk, 8).reshape(k, 8), kk[:, None]], axis=1).ravel()
+    cc = np.concatenate([np.stack([c, T + c], axis=2).reshape(k, 8), (2 * T + frames[fi])[:, None]], axis=1).ravel()
+    vv = np.concatenate([np.stack([n_x[:, None] * v, n_y[:, None] * v], axis=2).reshape(k, 8),
+                         np.full((k, 1), -1.0)], axis=1).ravel()
+    rhs = b - n_x * zmp[frames[fi], 0] - n_y * zmp[frames[fi], 1]
     A = _sparse(rr, cc, vv, k, 3 * T)
     # smoothness: I + tau^2 D1'D1 + tau^4 D2'D2 on each axis; the slack: SLACK_COST (quadratic + linear)
     t = np.arange(T - 1)

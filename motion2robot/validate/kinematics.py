@@ -115,8 +115,9 @@ def differentiate(qpos: np.ndarray, fps: float) -> tuple[np.ndarray, np.ndarray]
     return qvel, qacc
 
 
-def compute_kinematics(motion: RobotMotion, robot: Robot) -> Kinematics:
-    """Run the per-frame MuJoCo pass over ``motion`` (whose qpos layout must match ``robot``)."""
+def compute_kinematics(motion: RobotMotion, robot: Robot, *, collisions: bool = True) -> Kinematics:
+    """Run the per-frame MuJoCo pass over ``motion`` (whose qpos layout must match ``robot``);
+    ``collisions=False`` skips ``mj_collision`` (no contacts: for callers that need the rest)."""
     m = check_model(robot)
     d = mujoco.MjData(m)
     qpos = np.ascontiguousarray(motion.qpos, dtype=np.float64)
@@ -147,7 +148,8 @@ def compute_kinematics(motion: RobotMotion, robot: Robot) -> Kinematics:
         com_pos(m, d)
         com_vel(m, d)
         rne_fn(m, d, 1, rne[t])
-        collide(m, d)
+        if collisions:
+            collide(m, d)
         site_xpos[t] = d_site
         xanchor[t] = d_anchor
         xaxis[t] = d_axis

@@ -113,7 +113,6 @@ def play(ctx: Context) -> Playback:
     ctrl_ticks[:, [robot.joint_index(j) for j in cal.joints]] = cal.to_radians(ticks)
     steps = int(np.ceil(ticks.shape[0] / opts.stream_rate / dt - 1e-9))
     tick_of_step = np.minimum((np.arange(steps) * dt * opts.stream_rate + 1e-9).astype(int), ticks.shape[0] - 1)
-    ctrl = ctrl_ticks[tick_of_step]
     play_start = (settle + seq.ramp.shape[0]) / opts.stream_rate  # s of simulated time at play tick 0
     record_at = np.round((play_start + np.arange(kin.num_frames) / kin.fps) / dt).astype(int)
     record_at = np.minimum(record_at, steps - 1).tolist() + [-1]
@@ -130,11 +129,14 @@ def play(ctx: Context) -> Playback:
     feet = np.asarray(robot.foot_bodies)
     torso = int(robot.torso_body)
     cos_tilt = np.cos(np.radians(opts.fall_tilt_deg))
-    fall_frame, cause, stop_step = None, None, ctrl.shape[0]
+    fall_frame, cause, stop_step = None, None, steps
     f, next_record = 0, record_at[0]
     d_ctrl, step = d.ctrl, mujoco.mj_step
+    # the goal is constant between control ticks: step in runs (mj_step's nstep, the same steps in
+    # C) that stop at every tick change, every recorded frame and the stop after a fall
+    bounds = sorted({0, stop_step, *(np.flatnonzero(np.diff(tick_of_step)) + 1).tolist(), *record_at[:-1]})
     t0 = time.perf_counter()
-    for s in range(ctrl.shape[0]):
+    for i, s in enumerate(bounds):
         if s >= stop_step:
             break
         if s == next_record:
@@ -160,10 +162,10 @@ def play(ctx: Context) -> Playback:
                     stop_step = min(stop_step, s + round(AFTER_FALL / dt))
             f += 1
             next_record = record_at[f]
-        d_ctrl[:] = ctrl[s]
-        step(m, d)
+        d_ctrl[:] = ctrl_ticks[tick_of_step[s]]
+        step(m, d, min(bounds[i + 1], stop_step) - s)
     wall = time.perf_counter() - t0
-    sim_time = min(stop_step, ctrl.shape[0]) * dt
+    sim_time = min(stop_step, steps) * dt
     return Playback(time=np.arange(F) / kin.fps, qpos=qpos, torso_height=height, tilt_deg=tilt,
                     foot_contact=foot_contact, other_contact=other,
                     realtime_factor=sim_time / wall if wall > 0 else float("inf"),
