@@ -9,9 +9,9 @@
    projection onto the hard constraints, then the exact velocity clamp; up to REPAIR_ROUNDS more
    rounds while self-collision capsules still overlap;
 4. :func:`joint_smoothing`: one filter for root and hinges together
-   (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz
-   (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves' kinks
-   and noise; a projection takes the pinned soles back, its pushes on free limbs
+   (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz within the joint
+   limits (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves'
+   kinks and noise; a projection takes the pinned soles back, its pushes on free limbs
    spread over neighbouring frames (:func:`~.smoothing.spread_correction`).
 
 Each takes the :class:`~.setup.Setup` and returns the trajectory (T, nq).
@@ -102,7 +102,11 @@ def smooth_configuration(setup: Setup, Q: np.ndarray) -> np.ndarray:
     at = np.concatenate([np.full(3, racc), np.full(4, np.inf), a])
     # the low-pass after the target smoothing: its weighted rows end in kinks in the columns that
     # did not need them (a walk-back's shoulder at 100 fps: 12 -> 25 rad/s^2; with it 15)
-    out = low_pass(smooth_jointly(Q, vt, at, setup.fps), setup.fps)
+    # within the joint limits: a low-pass rounding a joint past its limit, clipped back, leaves a
+    # kink (op3 throw samples at 100 fps: a shoulder at its limit 24 -> 44 rad/s^2)
+    lo = np.concatenate([np.full(7, -np.inf), robot.lower])
+    hi = np.concatenate([np.full(7, np.inf), robot.upper])
+    out = low_pass(smooth_jointly(Q, vt, at, setup.fps), setup.fps, lower=lo, upper=hi)
     out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
     out[:, 7:] = np.clip(clamp_velocity(out[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
     return out
