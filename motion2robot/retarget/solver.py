@@ -201,7 +201,8 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
             max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False,
             extra: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Newton projection onto the hard constraints (see ``project`` in
-    :mod:`motion2robot.retarget.problem`), ``iterations`` times over every frame, then up to
+    :mod:`motion2robot.retarget.problem`), hinges within ``lower``/``upper`` ((n,), or (T, n) per
+    frame: equal bounds hold a hinge), ``iterations`` times over every frame, then up to
     ``extra`` more times over the frames still violating them (squared residual above
     :data:`EXTRA_TOLERANCE`; deep self-collisions need ~10 steps); hinges stay in their per-frame
     bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation.
