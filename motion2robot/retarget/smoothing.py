@@ -241,13 +241,14 @@ def _bounded(x: np.ndarray, u: np.ndarray, m: np.ndarray, lower: np.ndarray | No
         # is on the far side of the bound); a free frame past a bound is taken
         new_lo = np.where(at_lo, y <= lo, y < lo)
         new_hi = np.where(at_hi, y >= hi, y > hi)
-        if np.array_equal(new_lo, at_lo) and np.array_equal(new_hi, at_hi):
+        cols = np.flatnonzero((new_lo != at_lo).any(axis=0) | (new_hi != at_hi).any(axis=0))
+        if not len(cols):
             break
         at_lo, at_hi = new_lo, new_hi
-        held = at_lo | at_hi
+        held = (at_lo | at_hi)[:, cols]     # the columns are independent: only these change
         w = np.where(held, 1.0 + BOUND_WEIGHT, 1.0)
-        goal = np.where(at_lo, lo, np.where(at_hi, hi, 0.0))
-        y = _smooth((x + BOUND_WEIGHT * goal * held) / w, u, m, w)
+        goal = np.where(at_lo[:, cols], lo[cols], np.where(at_hi[:, cols], hi[cols], 0.0))
+        y[:, cols] = _smooth((x[:, cols] + BOUND_WEIGHT * goal * held) / w, u[:, cols], m[:, cols], w)
     return np.clip(y, lo, hi)
 
 

@@ -51,6 +51,9 @@ EXTRA_CORRECTIONS = 8
 #: capsule pair overlaps by more than PUSH_TOLERANCE (m); the last projection takes the rest.
 PUSH_ROUNDS = 4
 PUSH_TOLERANCE = 1e-5
+#: Passes of :func:`collision_pushes` at most that project again the frames whose push turned
+#: against the frame before's.
+SIDE_PASSES = 6
 
 
 def _clamp(setup: Setup, Q: np.ndarray) -> np.ndarray:
@@ -117,33 +120,44 @@ def smooth_configuration(setup: Setup, Q: np.ndarray) -> np.ndarray:
     return out
 
 
-def collision_pushes(setup: Setup, P: np.ndarray, smooth: np.ndarray, hit: np.ndarray) -> np.ndarray:
-    """``smooth`` (T, nq) with its frames ``hit`` (T,) taken out of self-collision by the free
-    limbs alone (the legs held: the pinned soles would turn their push into a one-frame kink), one
-    frame after the other through each run of hit frames, each frame's projection starting from the
-    push of the frame before: the projection's minimum-norm step picks its side per frame, and
-    neighbouring frames of one grazing (an elbow at the hip) took opposite sides (a shoulder pushed
-    +0.2 and -0.2 rad in two consecutive frames), which no spreading of the pushes can smooth."""
+def collision_pushes(setup: Setup, P: np.ndarray, Q: np.ndarray, hit: np.ndarray) -> np.ndarray:
+    """``Q`` (T, nq) with its frames ``hit`` (T,) taken out of self-collision by the free limbs
+    alone (the legs held: the pinned soles would turn their push into a one-frame kink), each frame
+    within a servo step of its neighbours. The projection's minimum-norm step picks its side per
+    frame, and neighbouring frames of one grazing (an elbow at the hip) took opposite sides (a
+    shoulder pushed +0.2 and -0.2 rad in two consecutive frames), which no spreading of the pushes
+    can smooth: a frame whose push turns against the push of the frame before is projected again
+    from that push (up to SIDE_PASSES times)."""
     robot = setup.robot
     free = free_limbs(robot)
-    out = smooth.copy()
-    lower = np.asarray(robot.lower, dtype=float)
-    upper = np.asarray(robot.upper, dtype=float)
-    push = np.zeros(robot.n_joints)
-    for t in np.flatnonzero(hit):
-        start = smooth[t:t + 1].copy()
-        if t > 0 and hit[t - 1]:
-            start[0, 7:] = np.clip(start[0, 7:] + np.where(free, push, 0.0), lower, upper)
-        lo, hi = lower.copy(), upper.copy()
-        for n in (t - 1, t + 1):  # within a servo step of both neighbours (as they are now)
-            if 0 <= n < len(out):
-                lo = np.maximum(lo, out[n, 7:] - setup.max_step)
-                hi = np.minimum(hi, out[n, 7:] + setup.max_step)
-        lo = np.where(free, np.minimum(lo, start[0, 7:]), smooth[t, 7:])
-        hi = np.where(free, np.maximum(hi, start[0, 7:]), smooth[t, 7:])
-        q, _ = correct(setup.problem, P[t:t + 1], start, lo[None], hi[None], None, 1, extra=EXTRA_CORRECTIONS)
-        out[t] = q[0]
-        push = out[t, 7:] - smooth[t, 7:]
+    q = Q[:, 7:]
+    lo = np.broadcast_to(robot.lower, q.shape).copy()
+    hi = np.broadcast_to(robot.upper, q.shape).copy()
+    if len(q) > 1:
+        lo[1:] = np.maximum(lo[1:], q[:-1] - setup.max_step)
+        lo[:-1] = np.maximum(lo[:-1], q[1:] - setup.max_step)
+        hi[1:] = np.minimum(hi[1:], q[:-1] + setup.max_step)
+        hi[:-1] = np.minimum(hi[:-1], q[1:] + setup.max_step)
+    lo = np.where(free, np.minimum(lo, q), q)   # legs: lower = upper = where they are
+    hi = np.where(free, np.maximum(hi, q), q)
+    out = Q.copy()
+    rows = np.flatnonzero(hit)
+    start = Q[rows].copy()
+    after = hit.copy()
+    after[0] = False
+    after[1:] &= hit[:-1]                       # hit frames whose frame before is hit too
+    for _ in range(SIDE_PASSES):
+        if not len(rows):
+            break
+        b_lo = np.minimum(lo[rows], start[:, 7:])
+        b_hi = np.maximum(hi[rows], start[:, 7:])
+        out[rows], _ = correct(setup.problem, P[rows], start, b_lo, b_hi, None, 1, extra=EXTRA_CORRECTIONS)
+        push = (out[:, 7:] - q) * free
+        turned = np.zeros(len(Q), dtype=bool)
+        turned[1:] = after[1:] & (np.sum(push[1:] * push[:-1], axis=1) < 0.0)
+        rows = np.flatnonzero(turned)
+        start = Q[rows].copy()
+        start[:, 7:] = np.clip(q[rows] + push[rows - 1], robot.lower, robot.upper)
     return out
 
 
