@@ -11,9 +11,10 @@
 4. :func:`joint_smoothing`: one filter for root and hinges together
    (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz within the joint
    limits (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves'
-   kinks and noise; a projection with the legs held takes the body out of the self-collisions
-   the filter made, its pushes on free limbs spread over neighbouring frames
-   (:func:`~.smoothing.spread_correction`), and a last one takes the pinned soles back.
+   kinks and noise; a projection without the self-collision rows takes the pinned soles back,
+   one with the legs held takes the arms and head out of the self-collisions the filter made
+   (:func:`collision_pushes`), its pushes spread over neighbouring frames
+   (:func:`~.smoothing.spread_correction`), and a last one over every joint takes what is left.
 
 Each takes the :class:`~.setup.Setup` and returns the trajectory (T, nq).
 """
@@ -34,7 +35,7 @@ from motion2robot.retarget.smoothing import (
     smooth_to_targets,
     spread_correction,
 )
-from motion2robot.retarget.solver import correct
+from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, hinge_bounds
 from motion2robot.retarget.targets import initial_qpos
 from motion2robot.robot.chains import free_limbs
 
@@ -131,15 +132,9 @@ def collision_pushes(setup: Setup, P: np.ndarray, Q: np.ndarray, hit: np.ndarray
     robot = setup.robot
     free = free_limbs(robot)
     q = Q[:, 7:]
-    lo = np.broadcast_to(robot.lower, q.shape).copy()
-    hi = np.broadcast_to(robot.upper, q.shape).copy()
-    if len(q) > 1:
-        lo[1:] = np.maximum(lo[1:], q[:-1] - setup.max_step)
-        lo[:-1] = np.maximum(lo[:-1], q[1:] - setup.max_step)
-        hi[1:] = np.minimum(hi[1:], q[:-1] + setup.max_step)
-        hi[:-1] = np.minimum(hi[:-1], q[1:] + setup.max_step)
-    lo = np.where(free, np.minimum(lo, q), q)   # legs: lower = upper = where they are
-    hi = np.where(free, np.maximum(hi, q), q)
+    lo, hi = hinge_bounds(q, robot.lower, robot.upper, setup.max_step)
+    lo = np.where(free, lo, q)   # legs: lower = upper = where they are
+    hi = np.where(free, hi, q)
     out = Q.copy()
     rows = np.flatnonzero(hit)
     start = Q[rows].copy()
@@ -161,28 +156,55 @@ def collision_pushes(setup: Setup, P: np.ndarray, Q: np.ndarray, hit: np.ndarray
     return out
 
 
+def free_limb_gaps(setup: Setup) -> np.ndarray:
+    """(g,) bool: the self-collision gaps (``setup.points``' fourth output) some free-limb hinge
+    moves, at the nominal posture: the collisions the arms and head can get out of."""
+    robot = setup.robot
+    q0 = np.asarray(robot.nominal_qpos, dtype=float)[None]
+    free = np.flatnonzero(free_limbs(robot))
+    Q = np.repeat(q0, len(free) + 1, axis=0)
+    Q[np.arange(1, len(free) + 1), 7 + free] += 0.05
+    Q[:, 7:] = np.clip(Q[:, 7:], robot.lower, robot.upper)
+    g = setup.points(Q)[3]
+    return (np.abs(g[1:] - g[0]) > 1e-9).any(axis=0)
+
+
 def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarray:
-    """Stage 4: the joint filter, then a projection back onto the hard constraints in two steps.
-    First, in the frames the filter pushed into a self-collision, the free limbs alone take the
-    body out of it (:func:`collision_pushes`), and their pushes are spread over neighbouring
-    frames. Then every joint: the pinned soles back (to second order of what the filter moved) and
-    what the free limbs could not resolve. Left to the legs, a collision push is a one-frame kink
-    that nothing smooths after this stage (op3 throw at 100 fps: an elbow grazing the hip,
-    553 rad/s^2 in the hip and 23 m/s^2 at the root)."""
+    """Stage 4: the joint filter, then the projection back onto the hard constraints in three
+    steps. The pinned soles back with every joint, without the self-collision rows (to second
+    order of what the filter moved). In the frames the filter left in a self-collision that the
+    arms or head can get out of (:func:`free_limb_gaps`), the free limbs alone take the body out
+    (:func:`collision_pushes`), their pushes spread over neighbouring frames. Last, every joint on
+    the frames still off a hard constraint (a collision of the legs alone, the CoM the arms moved).
+    Left to the legs, a collision push is a one-frame kink that nothing smooths after this stage
+    (op3 throw at 100 fps: an elbow grazing the hip, 553 rad/s^2 in the hip and 23 m/s^2 at the
+    root)."""
     robot = setup.robot
     P = plan.params(setup)
     free = free_limbs(robot)
     Q = smooth_configuration(setup, Q)
+    # the soles back first, with every joint but without the self-collision rows: a frame whose
+    # legs are held below would otherwise put its soles back by the root alone, unlike its
+    # neighbours (G1 throw at 100 fps: a 0.07 mm root step, 0.9 m/s^2)
+    Q, _ = correct(setup.problem, P, Q, robot.lower, robot.upper, setup.max_step, 1, extra=EXTRA_CORRECTIONS,
+                   collisions=False)
+    reach = free_limb_gaps(setup)   # a collision of the legs alone is left to the last projection
     for _ in range(PUSH_ROUNDS):
         # a spread push is a different combination of the free limbs' joints than the frame's own
         # push, and can leave a little of the collision: the next round pushes and spreads that
         # (keeping a frame's own push there instead left a one-frame notch: 93 rad/s^2 at 100 fps)
-        hit = setup.points(Q)[3].min(axis=1, initial=0.0) < -PUSH_TOLERANCE
+        hit = setup.points(Q)[3][:, reach].min(axis=1, initial=0.0) < -PUSH_TOLERANCE
         if not hit.any():
             break
         pushed = collision_pushes(setup, P, Q, hit)
         pushed[:, 7:] = spread_correction(Q[:, 7:], pushed[:, 7:], free, setup.fps)
         Q = pushed
-    Q, _ = correct(setup.problem, P, Q, robot.lower, robot.upper, setup.max_step, 1, extra=EXTRA_CORRECTIONS)
+    # every joint, on the frames still off a hard constraint (the arms' pushes moved the CoM, a
+    # collision the arms could not resolve)
+    v = setup.problem.violation_eval(len(Q))(Q, P)[0][:, 0]
+    rows = np.flatnonzero(v > EXTRA_TOLERANCE)
+    if len(rows):
+        lo, hi = hinge_bounds(Q[:, 7:], robot.lower, robot.upper, setup.max_step)
+        Q[rows], _ = correct(setup.problem, P[rows], Q[rows], lo[rows], hi[rows], None, 1, extra=EXTRA_CORRECTIONS)
     Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
     return Q

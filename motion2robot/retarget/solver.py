@@ -137,7 +137,7 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
         lm[:, 0] = lam
         lm[:, 1:1 + nv] = dt * sv2 + weights.damping
         lm[:, 1 + nv:1 + 2 * nv] = gt
-        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
+        lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step)
         lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo
         lm[:, 1 + 2 * nv + n:] = hi
         dx, cost, _ = step(Q, params, wvec, lm)
@@ -172,7 +172,7 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
     return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
 
 
-def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None):
+def hinge_bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None):
     """Per-frame hinge bounds (T, n): the joint limits, tightened to ``max_step`` of the neighbours'
     current values (never excluding the current value)."""
     lo = np.broadcast_to(lower, q.shape).copy()
@@ -199,7 +199,7 @@ def _projection_settings(damping: np.ndarray, lo: np.ndarray, hi: np.ndarray, nv
 
 def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: np.ndarray, upper: np.ndarray,
             max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False,
-            extra: int = 0) -> tuple[np.ndarray, np.ndarray]:
+            extra: int = 0, collisions: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Newton projection onto the hard constraints (see ``project`` in
     :mod:`motion2robot.retarget.problem`), hinges within ``lower``/``upper`` ((n,), or (T, n) per
     frame: equal bounds hold a hinge), ``iterations`` times over every frame, then up to
@@ -214,8 +214,10 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
 
     free_at_bounds: hinges at a bound take part in the step too (the projection holds them
     otherwise), the step being clipped into the bounds afterwards; for frames stuck with every
-    useful hinge at a velocity bound."""
+    useful hinge at a velocity bound. collisions False: the rows without self-collision (``settle``),
+    and the violation returned is theirs."""
     T, nv = Q.shape[0], problem.spec.nv
+    project = problem.project_eval if collisions else problem.settle_eval
     slack = FREE_SLACK if free_at_bounds else 0.0
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
@@ -229,22 +231,25 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
         rows = np.arange(T) if k < iterations else np.flatnonzero(v_prev > EXTRA_TOLERANCE)
         if not len(rows):
             break
-        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], settings(rows))
+        lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step)
+        dx, v = project(len(rows))(Q[rows], params[rows], settings(rows))
         v = v[:, 0]
         worse = v > v_prev[rows]
         mu[rows] = np.where(worse, np.maximum(mu[rows] * 10.0, RETRY_DAMPING), mu[rows] * 0.1)
         if worse.any():  # back to the previous iterate, a damped step from there
             back = rows[worse]
             Q[back], v[worse] = Q_prev[back], v_prev[back]
-            lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
-            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], settings(back))[0]
+            lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step)
+            dx[worse] = project(len(back))(Q[back], params[back], settings(back))[0]
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
         Q_prev[rows], v_prev[rows] = Q[rows], v
         Q[rows] = apply_step(Q[rows], dx)
         Q[rows, 7:] = np.clip(Q[rows, 7:], lo[rows], hi[rows])
     # the last steps' outcome: a frame made worse goes back
-    v = problem.violation_eval(T)(Q, params)[0][:, 0]
+    if collisions:
+        v = problem.violation_eval(T)(Q, params)[0][:, 0]
+    else:
+        v = project(T)(Q, params, _projection_settings(np.zeros(T), Q[:, 7:], Q[:, 7:], nv))[1][:, 0]
     worse = v > v_prev
     Q[worse], v[worse] = Q_prev[worse], v_prev[worse]
     return Q, v
