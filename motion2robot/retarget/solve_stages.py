@@ -125,7 +125,7 @@ def collision_pushes(setup: Setup, P: np.ndarray, Q: np.ndarray, hit: np.ndarray
     """``Q`` (T, nq) with its frames ``hit`` (T,) taken out of self-collision by the free limbs
     alone (the legs held: the pinned soles would turn their push into a one-frame kink), each frame
     within a servo step of its neighbours. The projection's minimum-norm step picks its side per
-    frame, and neighbouring frames of one grazing (an elbow at the hip) took opposite sides (a
+    frame, and neighbouring frames of one grazing (an elbow at the thigh) took opposite sides (a
     shoulder pushed +0.2 and -0.2 rad in two consecutive frames), which no spreading of the pushes
     can smooth: a frame whose push turns against the push of the frame before is projected again
     from that push (up to SIDE_PASSES times)."""
@@ -177,7 +177,7 @@ def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarra
     (:func:`collision_pushes`), their pushes spread over neighbouring frames. Last, every joint on
     the frames still off a hard constraint (a collision of the legs alone, the CoM the arms moved).
     Left to the legs, a collision push is a one-frame kink that nothing smooths after this stage
-    (op3 throw at 100 fps: an elbow grazing the hip, 553 rad/s^2 in the hip and 23 m/s^2 at the
+    (op3 throw at 100 fps: an elbow grazing the thigh, 553 rad/s^2 in a hip and 23 m/s^2 at the
     root)."""
     robot = setup.robot
     P = plan.params(setup)
