@@ -124,6 +124,35 @@ def test_finer_output_rate_reveals_no_spike(op3):
 
 
 @requires_shared
+@pytest.mark.parametrize("rel, clip, legs", [
+    ("mdm_results/mdm_throw_ball_results.npy", 1, "whole"),    # an elbow grazing the hip: the last
+    # projection pushed the legs out of it in single frames (553 rad/s^2 in a hip, 23 m/s^2 root)
+    ("mdm_results/mdm_throw_ball_results.npy", 5, "stance"),   # a shoulder at its limit: the low-pass
+    # rounded it past the limit and the clip left a kink (24 -> 44 rad/s^2)
+    ("bvh/bandai_bow_normal_001.bvh", 0, "whole"),             # the solve's last frames ran ahead of
+    # the rest (root 0.2 -> 0.4 m/s^2)
+])
+def test_100_fps_has_no_spike_the_native_rate_hides(op3, rel, clip, legs):
+    """Issue 16's artefact line on clips that failed it: at 100 fps the peak root and joint
+    accelerations stay within 1.5x of the native rate's, and the finer motion keeps its soles and
+    stays out of self-collision."""
+    from motion2robot.validate import CheckOptions
+
+    human = read_motion(MOTIONS / rel, clip=clip)[0]
+    native = retarget(human, op3, RetargetOptions(tempo="human", legs=legs))
+    fine = retarget(human, op3, RetargetOptions(tempo="human", legs=legs, fps=100.0))
+
+    def peaks(m):
+        acc = np.diff(m.qpos, 2, axis=0) * m.fps ** 2
+        return np.abs(acc[:, :3]).max(), np.abs(acc[:, 7:]).max()
+
+    (rn, jn), (rf, jf) = peaks(native), peaks(fine)
+    assert rf <= 1.5 * rn and jf <= 1.5 * jn, (rn, rf, jn, jf)
+    report = check(fine, op3, CheckOptions(physics=False))
+    assert report.checks["ground"]["ok"] and report.checks["self_collision"]["ok"], report.reasons
+
+
+@requires_shared
 def test_cli_tempo_answers(tmp_path, capsys):
     src = MOTIONS / "humanml3d_joints" / "M010968.npy"
     for bad in (["--tempo", "0"], ["--tempo", "fast"], ["--tempo-cap", "nan"], ["--legs", "none"]):

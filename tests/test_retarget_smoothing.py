@@ -222,3 +222,24 @@ def test_low_pass_is_the_same_filter_at_any_frame_rate():
     t = np.arange(400) / 100.0
     noise = np.sin(2 * np.pi * 25.0 * t)[:, None]
     assert np.abs(low_pass(noise, 100.0)[100:300]).max() < 0.02
+
+
+def test_low_pass_within_bounds_meets_them_without_a_kink():
+    """A joint pressed against its limit: the filter rounds it past the limit; clipped afterwards,
+    that is a kink whose acceleration grows with the rate (x2 at 200 fps). Within the bounds, the
+    filter stays within them and its peak acceleration is the unbounded filter's."""
+    from motion2robot.retarget.smoothing import low_pass
+
+    fps = 200.0
+    t = np.arange(int(2 * fps)) / fps
+    x = np.minimum(1.0, 0.9 + 0.2 * np.sin(2 * np.pi * t))[:, None]
+
+    def peak(y):
+        return np.abs(np.diff(y[:, 0], 2)).max() * fps ** 2
+
+    free = low_pass(x, fps)
+    bounded = low_pass(x, fps, lower=np.array([-5.0]), upper=np.array([1.0]))
+    assert free.max() > 1.001 and bounded.max() <= 1.0
+    assert peak(np.clip(free, -5.0, 1.0)) > 1.5 * peak(free)
+    assert peak(bounded) < 1.1 * peak(free)
+    assert np.abs(bounded - x).max() < 0.02

@@ -70,20 +70,22 @@ class _Stub:
         self.target, self.stiff = np.asarray(target, float), np.asarray(stiff, float)
         self.spec = SimpleNamespace(nv=7, length=1.0)
 
-    def _cost(self, Q):
-        e = Q[:, 7] - self.target
-        return (e ** 2 + self.stiff * e ** 4)[:, None]
+    def _cost(self, Q, P):
+        f = P[:, 0].astype(int)  # the frame parameters say which frame (the solver passes subsets)
+        e = Q[:, 7] - self.target[f]
+        return (e ** 2 + self.stiff[f] * e ** 4)[:, None]
 
     def cost_eval(self, T):
-        return lambda Q, P, w: (self._cost(Q), self._cost(Q))
+        return lambda Q, P, w: (self._cost(Q, P), self._cost(Q, P))
 
     def step_eval(self, T):
         def step(Q, P, w, lm):
-            e = Q[:, 7] - self.target
+            f = P[:, 0].astype(int)
+            e = Q[:, 7] - self.target[f]
             dx = np.zeros((len(Q), 7))
-            g = 2 * e + 4 * self.stiff * e ** 3 + lm[:, 1 + 7 + 6]
+            g = 2 * e + 4 * self.stiff[f] * e ** 3 + lm[:, 1 + 7 + 6]
             dx[:, 6] = -g / (2 * (1 + lm[:, 0]) + lm[:, 1 + 6])
-            return dx, self._cost(Q), self._cost(Q)
+            return dx, self._cost(Q, P), self._cost(Q, P)
         return step
 
 
@@ -92,7 +94,7 @@ def _stub_solve(stub, iterations, weights):
     q0 = np.zeros((T, 8))
     q0[:, 3] = 1.0
     wide = np.array([-100.0]), np.array([100.0])
-    return solver.solve(stub, np.zeros((T, 1)), q0, weights, iterations, *wide, second_order=0)
+    return solver.solve(stub, np.arange(T, dtype=float)[:, None], q0, weights, iterations, *wide, second_order=0)
 
 
 def test_a_refused_step_does_not_end_the_solve():

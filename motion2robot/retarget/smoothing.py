@@ -104,10 +104,12 @@ def pentadiagonal_solve(d0: np.ndarray, d1: np.ndarray, d2: np.ndarray, b: np.nd
     return x
 
 
-def _smooth(r: np.ndarray, u: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Minimiser of the weighted objective of the module docstring; u (T-1, k), m (T-2, k)."""
+def _smooth(r: np.ndarray, u: np.ndarray, m: np.ndarray, w: np.ndarray | None = None) -> np.ndarray:
+    """Minimiser of the weighted objective of the module docstring; u (T-1, k), m (T-2, k); ``w``
+    (T, k) weights of the first sum (None: all 1)."""
     T = len(r)
-    d0 = np.ones_like(r)
+    d0 = np.ones_like(r) if w is None else np.array(w, dtype=np.float64)
+    r = r if w is None else w * r
     d1 = np.zeros((T - 1, r.shape[1]))
     d2 = np.zeros((max(T - 2, 0), r.shape[1]))
     d0[:-1] += u
@@ -191,19 +193,63 @@ def smooth_jointly(x: np.ndarray, vtarget: np.ndarray, atarget: np.ndarray, fps:
     return _irls(out, vstep, astep, iterations, shared=True)
 
 
-def low_pass(x: np.ndarray, fps: float, cutoff_hz: float = CUTOFF_HZ) -> np.ndarray:
+def low_pass(x: np.ndarray, fps: float, cutoff_hz: float = CUTOFF_HZ, lower: np.ndarray | None = None,
+             upper: np.ndarray | None = None) -> np.ndarray:
     """(T, k) trajectories with content above ``cutoff_hz`` removed, the same filter at any frame
     rate: the minimiser of ``sum (y - x)^2 + m sum (second difference of y)^2`` with
     ``m = (fps / (2 pi cutoff_hz))^4`` (gain 1 / (1 + (f / cutoff)^4) at frequencies f well below
     the Nyquist rate), one weight
     for every column (a whole configuration filtered at once: pinned points move to second order).
-    At 20-30 fps it barely acts; at 100 fps it removes the solver noise a finer rate reveals."""
+    At 20-30 fps it barely acts; at 100 fps it removes the solver noise a finer rate reveals.
+
+    ``lower``/``upper`` (k,) (None or +-inf: unbounded): the same minimiser within the bounds
+    (:func:`_bounded`), so a trajectory resting at a bound is not rounded past it and then clipped
+    (a kink: its acceleration grows with the frame rate)."""
     out = np.array(x, dtype=np.float64)
     T = len(out)
     if T < 3:
         return out
-    m = (fps / (2.0 * np.pi * cutoff_hz)) ** 4
-    return _smooth(out, np.zeros((T - 1, out.shape[1])), np.full((T - 2, out.shape[1]), m))
+    m = np.full((T - 2, out.shape[1]), (fps / (2.0 * np.pi * cutoff_hz)) ** 4)
+    u = np.zeros((T - 1, out.shape[1]))
+    if lower is None and upper is None:
+        return _smooth(out, u, m)
+    return _bounded(out, u, m, lower, upper)
+
+
+#: Weight (relative to the data term's 1) that holds a frame at the bound it would cross, and the
+#: active-set passes of :func:`_bounded` at most.
+BOUND_WEIGHT = 1e8
+BOUND_ITERATIONS = 30
+
+
+def _bounded(x: np.ndarray, u: np.ndarray, m: np.ndarray, lower: np.ndarray | None,
+             upper: np.ndarray | None) -> np.ndarray:
+    """Minimiser of the objective of :func:`_smooth` (data weight 1) subject to lower <= y <= upper
+    per column, by a primal-dual active set: frames past a bound are held at it (weight
+    BOUND_WEIGHT), held frames the rest of the objective pulls back inside are released, until the
+    set stops changing; the last residue (~1/BOUND_WEIGHT) is clipped. It meets the bound without
+    a kink: its peak acceleration does not grow with the frame rate, as a clip after the filter's
+    does (see tests/test_retarget_smoothing.py)."""
+    T, k = x.shape
+    lo = np.broadcast_to(-np.inf if lower is None else np.asarray(lower, dtype=np.float64), (k,))
+    hi = np.broadcast_to(np.inf if upper is None else np.asarray(upper, dtype=np.float64), (k,))
+    y = _smooth(x, u, m)
+    at_lo = np.zeros((T, k), dtype=bool)
+    at_hi = np.zeros((T, k), dtype=bool)
+    for _ in range(BOUND_ITERATIONS):
+        # a held frame stays held while the rest of the objective pushes it outwards (its residue
+        # is on the far side of the bound); a free frame past a bound is taken
+        new_lo = np.where(at_lo, y <= lo, y < lo)
+        new_hi = np.where(at_hi, y >= hi, y > hi)
+        cols = np.flatnonzero((new_lo != at_lo).any(axis=0) | (new_hi != at_hi).any(axis=0))
+        if not len(cols):
+            break
+        at_lo, at_hi = new_lo, new_hi
+        held = (at_lo | at_hi)[:, cols]     # the columns are independent: only these change
+        w = np.where(held, 1.0 + BOUND_WEIGHT, 1.0)
+        goal = np.where(at_lo[:, cols], lo[cols], np.where(at_hi[:, cols], hi[cols], 0.0))
+        y[:, cols] = _smooth((x[:, cols] + BOUND_WEIGHT * goal * held) / w, u[:, cols], m[:, cols], w)
+    return np.clip(y, lo, hi)
 
 
 def spread_correction(before: np.ndarray, after: np.ndarray, joints: np.ndarray, fps: float,

@@ -9,10 +9,12 @@
    projection onto the hard constraints, then the exact velocity clamp; up to REPAIR_ROUNDS more
    rounds while self-collision capsules still overlap;
 4. :func:`joint_smoothing`: one filter for root and hinges together
-   (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz
-   (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves' kinks
-   and noise; a projection takes the pinned soles back, its pushes on free limbs
-   spread over neighbouring frames (:func:`~.smoothing.spread_correction`).
+   (:func:`~.smoothing.smooth_jointly`) and a low-pass at a fixed cutoff in Hz within the joint
+   limits (:func:`~.smoothing.low_pass`: the same filter at any output rate) remove the solves'
+   kinks and noise; a projection without the self-collision rows takes the pinned soles back,
+   one with the legs held takes the arms and head out of the self-collisions the filter made
+   (:func:`collision_pushes`), its pushes spread over neighbouring frames
+   (:func:`~.smoothing.spread_correction`), and a last one over every joint takes what is left.
 
 Each takes the :class:`~.setup.Setup` and returns the trajectory (T, nq).
 """
@@ -33,7 +35,7 @@ from motion2robot.retarget.smoothing import (
     smooth_to_targets,
     spread_correction,
 )
-from motion2robot.retarget.solver import correct
+from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct, hinge_bounds
 from motion2robot.retarget.targets import initial_qpos
 from motion2robot.robot.chains import free_limbs
 
@@ -46,6 +48,13 @@ REPAIR_TOLERANCE = 0.001
 #: Newton projection steps at most per round beyond the first two, on the frames still violating
 #: a hard constraint (deep self-collisions need ~10).
 EXTRA_CORRECTIONS = 8
+#: Rounds of :func:`collision_pushes` and spreading in :func:`joint_smoothing` at most, run while a
+#: capsule pair overlaps by more than PUSH_TOLERANCE (m); the last projection takes the rest.
+PUSH_ROUNDS = 4
+PUSH_TOLERANCE = 1e-5
+#: Passes of :func:`collision_pushes` at most that project again the frames whose push turned
+#: against the frame before's.
+SIDE_PASSES = 6
 
 
 def _clamp(setup: Setup, Q: np.ndarray) -> np.ndarray:
@@ -102,23 +111,100 @@ def smooth_configuration(setup: Setup, Q: np.ndarray) -> np.ndarray:
     at = np.concatenate([np.full(3, racc), np.full(4, np.inf), a])
     # the low-pass after the target smoothing: its weighted rows end in kinks in the columns that
     # did not need them (a walk-back's shoulder at 100 fps: 12 -> 25 rad/s^2; with it 15)
-    out = low_pass(smooth_jointly(Q, vt, at, setup.fps), setup.fps)
+    # within the joint limits: a low-pass rounding a joint past its limit, clipped back, leaves a
+    # kink (op3 throw samples at 100 fps: a shoulder at its limit 24 -> 44 rad/s^2)
+    lo = np.concatenate([np.full(7, -np.inf), robot.lower])
+    hi = np.concatenate([np.full(7, np.inf), robot.upper])
+    out = low_pass(smooth_jointly(Q, vt, at, setup.fps), setup.fps, lower=lo, upper=hi)
     out[:, 3:7] /= np.linalg.norm(out[:, 3:7], axis=1, keepdims=True)
     out[:, 7:] = np.clip(clamp_velocity(out[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
     return out
 
 
-def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarray:
-    """Stage 4: the joint filter, a projection back onto the hard constraints (to second order of
-    what the filter moved), the projection's pushes on free limbs spread over neighbouring frames."""
+def collision_pushes(setup: Setup, P: np.ndarray, Q: np.ndarray, hit: np.ndarray) -> np.ndarray:
+    """``Q`` (T, nq) with its frames ``hit`` (T,) taken out of self-collision by the free limbs
+    alone (the legs held: the pinned soles would turn their push into a one-frame kink), each frame
+    within a servo step of its neighbours. The projection's minimum-norm step picks its side per
+    frame, and neighbouring frames of one grazing (an elbow at the thigh) took opposite sides (a
+    shoulder pushed +0.2 and -0.2 rad in two consecutive frames), which no spreading of the pushes
+    can smooth: a frame whose push turns against the push of the frame before is projected again
+    from that push (up to SIDE_PASSES times)."""
     robot = setup.robot
-    smooth = smooth_configuration(setup, Q)
-    Q, _ = correct(setup.problem, plan.params(setup), smooth, robot.lower, robot.upper, setup.max_step, 1,
-                   extra=EXTRA_CORRECTIONS)
-    spread = Q.copy()
-    spread[:, 7:] = spread_correction(smooth[:, 7:], Q[:, 7:], free_limbs(robot), setup.fps)
-    # where pushes of opposite signs met, the spread can undo a frame's own: that frame keeps its push
-    worse = setup.points(spread)[3].min(axis=1, initial=0.0) < setup.points(Q)[3].min(axis=1, initial=0.0) - REPAIR_TOLERANCE
-    spread[worse] = Q[worse]
-    spread[:, 7:] = np.clip(clamp_velocity(spread[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
-    return spread
+    free = free_limbs(robot)
+    q = Q[:, 7:]
+    lo, hi = hinge_bounds(q, robot.lower, robot.upper, setup.max_step)
+    lo = np.where(free, lo, q)   # legs: lower = upper = where they are
+    hi = np.where(free, hi, q)
+    out = Q.copy()
+    rows = np.flatnonzero(hit)
+    start = Q[rows].copy()
+    after = hit.copy()
+    after[0] = False
+    after[1:] &= hit[:-1]                       # hit frames whose frame before is hit too
+    for _ in range(SIDE_PASSES):
+        if not len(rows):
+            break
+        b_lo = np.minimum(lo[rows], start[:, 7:])
+        b_hi = np.maximum(hi[rows], start[:, 7:])
+        out[rows], _ = correct(setup.problem, P[rows], start, b_lo, b_hi, None, 1, extra=EXTRA_CORRECTIONS)
+        push = (out[:, 7:] - q) * free
+        turned = np.zeros(len(Q), dtype=bool)
+        turned[1:] = after[1:] & (np.sum(push[1:] * push[:-1], axis=1) < 0.0)
+        rows = np.flatnonzero(turned)
+        start = Q[rows].copy()
+        start[:, 7:] = np.clip(q[rows] + push[rows - 1], robot.lower, robot.upper)
+    return out
+
+
+def free_limb_gaps(setup: Setup) -> np.ndarray:
+    """(g,) bool: the self-collision gaps (``setup.points``' fourth output) some free-limb hinge
+    moves, at the nominal posture: the collisions the arms and head can get out of."""
+    robot = setup.robot
+    q0 = np.asarray(robot.nominal_qpos, dtype=float)[None]
+    free = np.flatnonzero(free_limbs(robot))
+    Q = np.repeat(q0, len(free) + 1, axis=0)
+    Q[np.arange(1, len(free) + 1), 7 + free] += 0.05
+    Q[:, 7:] = np.clip(Q[:, 7:], robot.lower, robot.upper)
+    g = setup.points(Q)[3]
+    return (np.abs(g[1:] - g[0]) > 1e-9).any(axis=0)
+
+
+def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarray:
+    """Stage 4: the joint filter, then the projection back onto the hard constraints in three
+    steps. The pinned soles back with every joint, without the self-collision rows (to second
+    order of what the filter moved). In the frames the filter left in a self-collision that the
+    arms or head can get out of (:func:`free_limb_gaps`), the free limbs alone take the body out
+    (:func:`collision_pushes`), their pushes spread over neighbouring frames. Last, every joint on
+    the frames still off a hard constraint (a collision of the legs alone, the CoM the arms moved).
+    Left to the legs, a collision push is a one-frame kink that nothing smooths after this stage
+    (op3 throw at 100 fps: an elbow grazing the thigh, 553 rad/s^2 in a hip and 23 m/s^2 at the
+    root)."""
+    robot = setup.robot
+    P = plan.params(setup)
+    free = free_limbs(robot)
+    Q = smooth_configuration(setup, Q)
+    # the soles back first, with every joint but without the self-collision rows: a frame whose
+    # legs are held below would otherwise put its soles back by the root alone, unlike its
+    # neighbours (G1 throw at 100 fps: a 0.07 mm root step, 0.9 m/s^2)
+    Q, _ = correct(setup.problem, P, Q, robot.lower, robot.upper, setup.max_step, 1, extra=EXTRA_CORRECTIONS,
+                   collisions=False)
+    reach = free_limb_gaps(setup)   # a collision of the legs alone is left to the last projection
+    for _ in range(PUSH_ROUNDS):
+        # a spread push is a different combination of the free limbs' joints than the frame's own
+        # push, and can leave a little of the collision: the next round pushes and spreads that
+        # (keeping a frame's own push there instead left a one-frame notch: 93 rad/s^2 at 100 fps)
+        hit = setup.points(Q)[3][:, reach].min(axis=1, initial=0.0) < -PUSH_TOLERANCE
+        if not hit.any():
+            break
+        pushed = collision_pushes(setup, P, Q, hit)
+        pushed[:, 7:] = spread_correction(Q[:, 7:], pushed[:, 7:], free, setup.fps)
+        Q = pushed
+    # every joint, on the frames still off a hard constraint (the arms' pushes moved the CoM, a
+    # collision the arms could not resolve)
+    v = setup.problem.violation_eval(len(Q))(Q, P)[0][:, 0]
+    rows = np.flatnonzero(v > EXTRA_TOLERANCE)
+    if len(rows):
+        lo, hi = hinge_bounds(Q[:, 7:], robot.lower, robot.upper, setup.max_step)
+        Q[rows], _ = correct(setup.problem, P[rows], Q[rows], lo[rows], hi[rows], None, 1, extra=EXTRA_CORRECTIONS)
+    Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
+    return Q

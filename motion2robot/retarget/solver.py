@@ -6,7 +6,8 @@ One call of the compiled, frame-mapped ``step`` function returns each frame's no
 block-Jacobi term (neighbours held at the current iterate), which keeps every frame's linear
 system independent. Their Hessian is replaced by a diagonal that majorises it (each pair or
 triple of frames gets ``|a_i| * sum|a|`` on its diagonal: 2 w_v per velocity row, 4-8-4 w_a per
-acceleration row), so the simultaneous update of all frames decreases the temporal cost: with
+acceleration row; the end frames, with fewer rows, get the interior's sum too, so that every frame
+steps alike), so the simultaneous update of all frames decreases the temporal cost: with
 the plain diagonal (w_v per neighbour, 1-4-1 w_a) the Jacobi iteration amplifies the odd/even
 mode of a coordinate the tracking terms barely pin (iteration eigenvalue
 1 - (4 w_v + 16 w_a) / (2 w_v + 6 w_a), -1.6 with the default weights), which made the output
@@ -83,6 +84,11 @@ def _temporal(Q: np.ndarray, sv: np.ndarray, w: Weights) -> tuple[np.ndarray, np
         diag[:-2] += 4 * wa
         diag[2:] += 4 * wa
         cost[1:-1] += wa * np.sum(a * a, axis=1)
+    # every frame gets the interior frames' diagonal (still a majoriser): the first and last frames,
+    # with fewer neighbours, would take larger steps than the rest and run ahead of them in the few
+    # iterations the solver makes, leaving a transient at the clip's ends that grows with the rate
+    # (op3 bow at 100 fps: the last 3 frames' root 2 m/s^2, a walk-back's shoulder at the start)
+    diag[:] = diag.max()
     return g, diag, cost
 
 
@@ -131,7 +137,7 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
         lm[:, 0] = lam
         lm[:, 1:1 + nv] = dt * sv2 + weights.damping
         lm[:, 1 + nv:1 + 2 * nv] = gt
-        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step)
+        lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step)
         lm[:, 1 + 2 * nv:1 + 2 * nv + n] = lo
         lm[:, 1 + 2 * nv + n:] = hi
         dx, cost, _ = step(Q, params, wvec, lm)
@@ -166,31 +172,23 @@ def solve(problem: CompiledProblem, params: np.ndarray, q0: np.ndarray, weights:
     return Q, SolveStats(it, time.perf_counter() - t0, cost[:, 0], terms)
 
 
-def _bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None,
-            rows: np.ndarray | None = None):
-    """Per-frame hinge bounds (T, n): the joint limits, tightened to ``max_step`` of the neighbours'
-    current values (never excluding the current value); with ``rows``, those frames' only
-    (len(rows), n), the same numbers."""
-    if rows is not None:
-        qr = q[rows]
-        lo = np.broadcast_to(lower, qr.shape).copy()
-        hi = np.broadcast_to(upper, qr.shape).copy()
-        if max_step is not None and len(q) > 1:
-            prev, nxt = rows >= 1, rows < len(q) - 1
-            lo[prev] = np.maximum(lo[prev], q[rows[prev] - 1] - max_step)
-            lo[nxt] = np.maximum(lo[nxt], q[rows[nxt] + 1] - max_step)
-            hi[prev] = np.minimum(hi[prev], q[rows[prev] - 1] + max_step)
-            hi[nxt] = np.minimum(hi[nxt], q[rows[nxt] + 1] + max_step)
-            lo, hi = np.minimum(lo, qr), np.maximum(hi, qr)
-        return lo, hi
-    lo = np.broadcast_to(lower, q.shape).copy()
-    hi = np.broadcast_to(upper, q.shape).copy()
+def hinge_bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, max_step: np.ndarray | None,
+                 rows: np.ndarray | None = None):
+    """Per-frame hinge bounds (T, n): the joint limits (``lower``/``upper`` (n,) or (T, n)),
+    tightened to ``max_step`` of the neighbours' current values (never excluding the current
+    value); with ``rows``, those frames' only (len(rows), n), the same numbers."""
+    if rows is None:
+        rows = np.arange(len(q))
+    qr = q[rows]
+    lo = (lower[rows] if np.ndim(lower) == 2 else np.broadcast_to(lower, qr.shape)).copy()
+    hi = (upper[rows] if np.ndim(upper) == 2 else np.broadcast_to(upper, qr.shape)).copy()
     if max_step is not None and len(q) > 1:
-        lo[1:] = np.maximum(lo[1:], q[:-1] - max_step)
-        lo[:-1] = np.maximum(lo[:-1], q[1:] - max_step)
-        hi[1:] = np.minimum(hi[1:], q[:-1] + max_step)
-        hi[:-1] = np.minimum(hi[:-1], q[1:] + max_step)
-        lo, hi = np.minimum(lo, q), np.maximum(hi, q)
+        prev, nxt = rows >= 1, rows < len(q) - 1
+        lo[prev] = np.maximum(lo[prev], q[rows[prev] - 1] - max_step)
+        lo[nxt] = np.maximum(lo[nxt], q[rows[nxt] + 1] - max_step)
+        hi[prev] = np.minimum(hi[prev], q[rows[prev] - 1] + max_step)
+        hi[nxt] = np.minimum(hi[nxt], q[rows[nxt] + 1] + max_step)
+        lo, hi = np.minimum(lo, qr), np.maximum(hi, qr)
     return lo, hi
 
 
@@ -207,9 +205,10 @@ def _projection_settings(damping: np.ndarray, lo: np.ndarray, hi: np.ndarray, nv
 
 def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: np.ndarray, upper: np.ndarray,
             max_step: np.ndarray | None, iterations: int, free_at_bounds: bool = False,
-            extra: int = 0) -> tuple[np.ndarray, np.ndarray]:
+            extra: int = 0, collisions: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Newton projection onto the hard constraints (see ``project`` in
-    :mod:`motion2robot.retarget.problem`), ``iterations`` times over every frame, then up to
+    :mod:`motion2robot.retarget.problem`), hinges within ``lower``/``upper`` ((n,), or (T, n) per
+    frame: equal bounds hold a hinge), ``iterations`` times over every frame, then up to
     ``extra`` more times over the frames still violating them (squared residual above
     :data:`EXTRA_TOLERANCE`; deep self-collisions need ~10 steps); hinges stay in their per-frame
     bounds. Returns the corrected (T, nq) qpos and each frame's remaining squared violation.
@@ -221,8 +220,10 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
 
     free_at_bounds: hinges at a bound take part in the step too (the projection holds them
     otherwise), the step being clipped into the bounds afterwards; for frames stuck with every
-    useful hinge at a velocity bound."""
+    useful hinge at a velocity bound. collisions False: the rows without self-collision (``settle``),
+    and the violation returned is theirs."""
     T, nv = Q.shape[0], problem.spec.nv
+    project = problem.project_eval if collisions else problem.settle_eval
     slack = FREE_SLACK if free_at_bounds else 0.0
     Q = Q.copy()
     Q_prev, v_prev = Q.copy(), np.full(T, np.inf)
@@ -236,23 +237,25 @@ def correct(problem: CompiledProblem, params: np.ndarray, Q: np.ndarray, lower: 
         rows = np.arange(T) if k < iterations else np.flatnonzero(v_prev > EXTRA_TOLERANCE)
         if not len(rows):
             break
-        some = None if k < iterations else rows  # the bounds of the frames stepped only
-        lo, hi = _bounds(Q[:, 7:], lower, upper, max_step, some)
-        dx, v = problem.project_eval(len(rows))(Q[rows], params[rows], settings(mu[rows], lo, hi))
+        lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step, rows)  # the frames stepped only
+        dx, v = project(len(rows))(Q[rows], params[rows], settings(mu[rows], lo, hi))
         v = v[:, 0]
         worse = v > v_prev[rows]
         mu[rows] = np.where(worse, np.maximum(mu[rows] * 10.0, RETRY_DAMPING), mu[rows] * 0.1)
         if worse.any():  # back to the previous iterate, a damped step from there
             back = rows[worse]
             Q[back], v[worse] = Q_prev[back], v_prev[back]
-            lo, hi = _bounds(Q[:, 7:], lower, upper, max_step, some)
-            dx[worse] = problem.project_eval(len(back))(Q[back], params[back], settings(mu[back], lo[worse], hi[worse]))[0]
+            lo, hi = hinge_bounds(Q[:, 7:], lower, upper, max_step, rows)
+            dx[worse] = project(len(back))(Q[back], params[back], settings(mu[back], lo[worse], hi[worse]))[0]
         dx *= np.minimum(1.0, MAX_CORRECTION / np.maximum(np.abs(dx).max(axis=1), 1e-12))[:, None]
         Q_prev[rows], v_prev[rows] = Q[rows], v
         Q[rows] = apply_step(Q[rows], dx)
         Q[rows, 7:] = np.clip(Q[rows, 7:], lo, hi)
     # the last steps' outcome: a frame made worse goes back
-    v = problem.violation_eval(T)(Q, params)[0][:, 0]
+    if collisions:
+        v = problem.violation_eval(T)(Q, params)[0][:, 0]
+    else:
+        v = project(T)(Q, params, _projection_settings(np.zeros(T), Q[:, 7:], Q[:, 7:], nv))[1][:, 0]
     worse = v > v_prev
     Q[worse], v[worse] = Q_prev[worse], v_prev[worse]
     return Q, v
