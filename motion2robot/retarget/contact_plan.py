@@ -12,6 +12,7 @@ Units: metres; world frame z up.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -83,8 +84,14 @@ def unpinned(setup: Setup) -> ContactPlan:
                        setup.labels.any(axis=1), 0.0, None, 0.0)
 
 
-def plan_contacts(setup: Setup, corners: np.ndarray) -> ContactPlan:
-    """The contact plan from the free-feet solve's sole corners (T, 2, 4, 3)."""
+def plan_contacts(setup: Setup, corners: np.ndarray, cap_swing_speed: bool = True,
+                  place: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                  swing_shape: tuple[float, float] | None = None) -> ContactPlan:
+    """The contact plan from the free-feet solve's sole corners (T, 2, 4, 3). ``cap_swing_speed``
+    off: every swing is planned, however fast; ``place``: (soles, labels) -> soles, moves the
+    placements before they are separated, and the swings then go straight between them;
+    ``swing_shape``: (lead, ramp) of the swings (:func:`~.footsteps.swing_path`) (all for the
+    ``steps`` pattern, judged by the checks)."""
     opt, robot = setup.opt, setup.robot
     half = min(min(f.sole_half) for f in robot.config.feet)
     margin = opt.margin if opt.margin is not None else MARGIN_FRACTION * half
@@ -92,15 +99,19 @@ def plan_contacts(setup: Setup, corners: np.ndarray) -> ContactPlan:
         return replace(unpinned(setup), margin=margin)
     labels = setup.labels
     soles = anchor_soles(corners, labels)
+    if place is not None:
+        soles = place(soles, labels)
     feet = foot_capsules(robot)
     push = 0.0
     if feet is not None:  # phases anchored at different frames must not pin the feet into each other
         soles, push = separate_anchors(soles, labels, *feet, MARGIN + ANCHOR_CLEARANCE)
     pinned, targets, plan = labels, soles, None
     if opt.lift_feet:  # every corner of a foot with a plan has a target in every frame
-        max_speed = FOOT_SPEED_RATIO * setup.problem.spec.length * float(np.min(robot.velocity_limit))
+        max_speed = (FOOT_SPEED_RATIO * setup.problem.spec.length * float(np.min(robot.velocity_limit))
+                     if cap_swing_speed else np.inf)
         plan = plan_feet(soles, labels, corners, APEX_RATIO * float(robot.nominal_qpos[2]), feet,
-                         MARGIN + ANCHOR_CLEARANCE, max_speed, setup.fps)
+                         MARGIN + ANCHOR_CLEARANCE, max_speed, setup.fps, straight_swings=place is not None,
+                         **({"shape": swing_shape} if swing_shape is not None else {}))
         labels, pinned, targets = plan.contact, plan.pinned, plan.targets
         soles = np.where(labels[:, :, None, None], targets, np.nan)
     planes, support = support_planes(soles, labels, margin)

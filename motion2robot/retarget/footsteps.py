@@ -80,12 +80,12 @@ def minimum_jerk(s: np.ndarray) -> np.ndarray:
     return s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
 
 
-def lift(s: np.ndarray) -> np.ndarray:
+def lift(s: np.ndarray, ramp: float = LIFT_RAMP) -> np.ndarray:
     """Swing height profile over s in [0, 1]: a minimum-jerk rise over the first LIFT_RAMP, the
     apex (1) held, a minimum-jerk descent over the last LIFT_RAMP (zero speed and acceleration at
     lift-off and touch-down)."""
     s = np.clip(s, 0.0, 1.0)
-    return minimum_jerk(s / LIFT_RAMP) * minimum_jerk((1.0 - s) / LIFT_RAMP)
+    return minimum_jerk(s / ramp) * minimum_jerk((1.0 - s) / ramp)
 
 
 def _pose(corners: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -113,15 +113,24 @@ def _centre_yaw(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return xy.mean(axis=1), yaw
 
 
-def swing_path(a: np.ndarray, b: np.ndarray, free: np.ndarray, apex: float) -> np.ndarray:
+def straight(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
+    """(n + 2, 4, 3) corners moving linearly from ``a`` to ``b`` (4, 3): a ``free`` path for
+    :func:`swing_path` that makes it a straight minimum-jerk swing."""
+    w = np.linspace(0.0, 1.0, n + 2)[:, None, None]
+    return (1.0 - w) * a + w * b
+
+
+def swing_path(a: np.ndarray, b: np.ndarray, free: np.ndarray, apex: float, lead: float = LIFT_LEAD,
+               ramp: float = LIFT_RAMP) -> np.ndarray:
     """(n, 4, 3) corners of the ``n`` frames strictly between placements ``a`` and ``b`` (4, 3).
 
     ``free``: (n + 2, 4, 3) corners of the unpinned solve from the frame of ``a`` to the frame of
     ``b``: the horizontal path follows its shape (around the other foot, as the human's foot went),
-    time-warped by the lift-lead profile and bent so it leaves ``a`` and reaches ``b`` exactly."""
+    time-warped by the lift-lead profile and bent so it leaves ``a`` and reaches ``b`` exactly.
+    ``lead`` and ``ramp``: LIFT_LEAD and LIFT_RAMP unless the caller shapes its swings otherwise."""
     n = len(free) - 2
     s = np.arange(1, n + 1) / (n + 1)
-    h = minimum_jerk((s - LIFT_LEAD) / (1.0 - 2.0 * LIFT_LEAD))
+    h = minimum_jerk((s - lead) / (1.0 - 2.0 * lead))
     ca, ya, la = _pose(a)
     cb, yb, lb = _pose(b)
     fc, fy = _centre_yaw(free)
@@ -137,7 +146,7 @@ def swing_path(a: np.ndarray, b: np.ndarray, free: np.ndarray, apex: float) -> n
     centre = path_c + (1 - h)[:, None] * da + h[:, None] * db
     yaw = path_y + (1 - h) * (ya_ - fy[0]) + h * (yb_ - fy[-1])
     layout = la + h[:, None, None] * (lb - la)
-    return _place(centre, yaw, layout, apex * lift(s))
+    return _place(centre, yaw, layout, apex * lift(s, ramp))
 
 
 def clear_swings(targets: np.ndarray, swing: np.ndarray, contact: np.ndarray, local: np.ndarray,
@@ -189,7 +198,8 @@ def _goes_nowhere(a: np.ndarray, b: np.ndarray) -> bool:
 
 def plan_feet(anchors: np.ndarray, labels: np.ndarray, free_corners: np.ndarray, base_apex: float,
               capsules: tuple[np.ndarray, np.ndarray] | None = None, clearance: float = 0.0,
-              max_speed: float = np.inf, fps: float = 1.0) -> FootPlan:
+              max_speed: float = np.inf, fps: float = 1.0, straight_swings: bool = False,
+              shape: tuple[float, float] = (LIFT_LEAD, LIFT_RAMP)) -> FootPlan:
     """The plan of both soles.
 
     anchors: (T, 2, 4, 3) pinned corners of every contact frame (NaN elsewhere), one placement per
@@ -200,7 +210,11 @@ def plan_feet(anchors: np.ndarray, labels: np.ndarray, free_corners: np.ndarray,
     :func:`clear_swings` with ``clearance`` (m); max_speed: m/s a sole corner can move at the
     clip's rate ``fps``: a swing whose plan would need more is left free (no targets: the solver
     moves the foot as the human's, within the servos' speed), since a stance foot would otherwise
-    be dragged to a placement the swing could not reach in time (counted in ``too_fast``)."""
+    be dragged to a placement the swing could not reach in time (counted in ``too_fast``);
+    straight_swings: swings go straight between the placements (:func:`straight`) instead of
+    along the unpinned solve's path, and are not bent around the stance foot (for placements
+    that are no longer the human's and keep the feet a stance width apart themselves); shape:
+    (lead, ramp) of :func:`swing_path` and :func:`lift`."""
     targets = np.full(anchors.shape, np.nan)
     contact = labels.copy()
     swing = np.zeros_like(labels)
@@ -221,7 +235,9 @@ def plan_feet(anchors: np.ndarray, labels: np.ndarray, free_corners: np.ndarray,
                 else:
                     height = np.nan_to_num(free_corners[gap0:a, f, :, 2], nan=0.0).min(axis=1).max(initial=0.0)
                     apex = max(base_apex, float(height))
-                    targets[gap0:a, f] = swing_path(place, nxt, free_corners[gap0 - 1:a + 1, f], apex)
+                    free = (straight(place, nxt, a - gap0) if straight_swings
+                            else free_corners[gap0 - 1:a + 1, f])
+                    targets[gap0:a, f] = swing_path(place, nxt, free, apex, *shape)
                     swing[gap0:a, f] = True
                     steps[f] += 1
                     apexes.append((f, gap0, apex))
@@ -238,7 +254,7 @@ def plan_feet(anchors: np.ndarray, labels: np.ndarray, free_corners: np.ndarray,
             too_fast += 1
             dropped.add((f, a))
     bend = 0.0
-    if capsules is not None:
+    if capsules is not None and not straight_swings:  # re-laid placements keep the feet apart themselves
         targets, bend = clear_swings(targets, swing, contact, *capsules, clearance)
     kept = tuple(apex for f, a, apex in apexes if (f, a) not in dropped)
     return FootPlan(targets, contact, swing, (steps[0], steps[1]), kept, merged, bend, too_fast)

@@ -77,11 +77,14 @@ def _second_difference(T: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, support: np.ndarray,
-                     fps: float) -> tuple[np.ndarray, np.ndarray]:
+                     fps: float, jerk_time: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """CoM shift d (T, 2) putting the cart-table-corrected ZMP inside ``planes`` (T, HMAX, 3) rows
     n . p <= b in the ``support`` (T,) frames, and the ZMP's remaining distance outside (T,) (m).
 
-    zmp (T, 2): the trajectory's ZMP (NaN rows are left unconstrained); com_z (T,) CoM heights."""
+    zmp (T, 2): the trajectory's ZMP (NaN rows are left unconstrained); com_z (T,) CoM heights;
+    jerk_time: s, weight of the shift's jerk (jerk x jerk_time^3 weighs like a shift; 0 = not
+    charged): with it the CoM's acceleration, and so the ZMP, changes smoothly where the support
+    polygon changes instead of jumping in one frame."""
     T = len(zmp)
     ok = support & np.isfinite(zmp).all(axis=1)
     if T < 3 or not ok.any():
@@ -115,6 +118,9 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     D2 = _sparse(r2, c2, v2 * fps ** 2, T, T)
     tau = SMOOTH_TIME
     Hd = ca.DM.eye(T) + tau ** 2 * ca.mtimes(D1.T, D1) + tau ** 4 * ca.mtimes(D2.T, D2)
+    if jerk_time > 0.0:
+        D3 = ca.mtimes(D1, D2)
+        Hd = Hd + jerk_time ** 6 * ca.mtimes(D3.T, D3)
     H = ca.diagcat(Hd, Hd, SLACK_COST * ca.DM.eye(T))
     g = np.concatenate([np.zeros(2 * T), np.full(T, SLACK_COST * 1e-2)])
     solver = ca.conic("zmp_plan", "osqp", {"h": H.sparsity(), "a": A.sparsity()}, _osqp_options())
