@@ -1,0 +1,177 @@
+"""Footholds for a walking pattern: the human's placements re-laid within the robot's reach.
+
+A human stride scaled to a small robot is still too long for it (op3: the Bandai walk asks for
+0.22 m between the feet, 80 % of its straight leg), and a human sets its feet closer together than
+the robot's hips. :func:`shorten_steps` re-lays the placements step by step: each step keeps the
+human's turn and sideways offset, its fore-aft length shrinks by the clip's :func:`step_factor`,
+and a foot set beside the other stays :func:`stance_width` to its side. Every placement keeps its
+yaw. Units: metres, radians; world frame z up.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from motion2robot.errors import SolverError
+
+
+class PatternError(SolverError):
+    """The clip gives no walking pattern (a foot never stands on the floor): ``steps`` cannot be
+    tried on it (``auto`` goes on to the next alternative; ``--legs steps`` reports it)."""
+from motion2robot.retarget.contact_plan import ContactPlan
+from motion2robot.retarget.contacts import phases
+from motion2robot.robot.chains import foot_ancestor_mask
+from motion2robot.robot.robot import Robot
+
+
+def _sole_yaw(corners: np.ndarray) -> float:
+    """Yaw (rad) of a sole from its (4, 3) corners (front-left, front-right, back-right, back-left)."""
+    fwd = corners[:2, :2].sum(axis=0) - corners[2:, :2].sum(axis=0)
+    return float(np.arctan2(fwd[1], fwd[0]))
+
+
+def _steps(labels: np.ndarray) -> list[tuple[int, int, int, tuple[int, int, int] | None]]:
+    """The contact phases in order of their first frame as (foot, first, end, reference): the
+    reference is the phase before it, None for the phases the clip starts with."""
+    runs = sorted(phases(labels), key=lambda r: (r[1], r[0]))
+    out, prev = [], None
+    for f, a, b in runs:
+        out.append((f, a, b, prev if prev is not None and prev[1] < a else None))
+        prev = (f, a, b)
+    return out
+
+
+def _step_axes(soles: np.ndarray, ref: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Forward and left unit vectors of a step: the heading of the placement it steps from (the
+    foot the robot stands on while it swings)."""
+    yaw = _sole_yaw(soles[ref[1], ref[0]])
+    return np.array([np.cos(yaw), np.sin(yaw)]), np.array([-np.sin(yaw), np.cos(yaw)])
+
+
+def step_factor(soles: np.ndarray, labels: np.ndarray, longest: float) -> float:
+    """The factor (<= 1) that brings the longest step down to ``longest`` (m): a step's length is
+    the fore-aft distance, in its heading (:func:`_step_axes`), from the placement before it to
+    its own (``soles`` (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames)."""
+    worst = 0.0
+    for f, a, _, ref in _steps(labels):
+        if ref is None:
+            continue
+        fwd, _ = _step_axes(soles, ref)
+        gap = soles[a, f].mean(axis=0)[:2] - soles[ref[1], ref[0]].mean(axis=0)[:2]
+        worst = max(worst, abs(float(gap @ fwd)))
+    return float(min(1.0, longest / max(worst, 1e-9)))
+
+
+def _wrap(a: float) -> float:
+    return float((a + np.pi) % (2 * np.pi) - np.pi)
+
+
+def _turned(sole: np.ndarray, centre: np.ndarray, yaw: float) -> np.ndarray:
+    """(4, 3) the sole ``sole`` (4, 3) turned about its centre to ``yaw`` and moved to ``centre`` (2,)."""
+    c0 = sole.mean(axis=0)
+    d = yaw - _sole_yaw(sole)
+    R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    out = sole.copy()
+    out[:, :2] = (sole[:, :2] - c0[:2]) @ R.T + centre
+    return out
+
+
+def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float, max_turn: float) -> np.ndarray:
+    """Placements re-laid step by step (:func:`_steps`), each from the re-laid placement it steps
+    from: the step keeps the human's sideways offset and turn in that placement's frame, its
+    fore-aft length shrinks by ``k``, a foot set beside the other lands at least ``width`` (m) to
+    its own side of it (the robot's own stance width: its hip rolls cannot hold the body over a
+    foot set inside the hip, as a human's narrower placements would ask), and a foot turns at
+    most ``max_turn`` (rad) from the one it steps from (the hip yaws' range; the human's heading
+    is caught up on the next steps). The feet the clip starts on are turned to within
+    ``max_turn / 2`` of their mean heading. ``soles``: (T, 2, 4, 3) placements in the ``labels``
+    (T, 2) contact frames."""
+    out = soles.copy()
+    runs = _steps(labels)
+    first = [(f, a, b) for f, a, b, ref in runs if ref is None]
+    if len(first) == 2:
+        ya, yb = (_sole_yaw(soles[a, f]) for f, a, _ in first)
+        mean = ya + 0.5 * _wrap(yb - ya)
+        for f, a, b in first:
+            yaw = mean + float(np.clip(_wrap(_sole_yaw(soles[a, f]) - mean), -max_turn / 2, max_turn / 2))
+            out[a:b, f] = _turned(soles[a, f], soles[a, f].mean(axis=0)[:2], yaw)
+    for f, a, b, ref in runs:
+        if ref is None:
+            continue
+        fwd, left = _step_axes(soles, ref)                     # the human's step, in its frame
+        gap = soles[a, f].mean(axis=0)[:2] - soles[ref[1], ref[0]].mean(axis=0)[:2]
+        fore, lat = float(gap @ fwd), float(gap @ left)
+        if ref[0] != f:
+            side = 1.0 if f == 0 else -1.0
+            lat = side * max(side * lat, width)
+        else:
+            lat *= k
+        base = out[ref[1], ref[0]]
+        yaw_ref = _sole_yaw(base)
+        fwd, left = _step_axes(out, ref)                       # laid from the re-laid placement
+        yaw = yaw_ref + float(np.clip(_wrap(_sole_yaw(soles[a, f]) - yaw_ref), -max_turn, max_turn))
+        out[a:b, f] = _turned(soles[a, f], base.mean(axis=0)[:2] + k * fore * fwd + lat * left, yaw)
+    return out
+
+
+def stance_width(robot: Robot) -> float:
+    """m between the sole centres of a walking stance: the legs straight down from the hips (the
+    distance between the first hinges of the two legs at the nominal posture), or the soles' width
+    and a centimetre if that is more (the soles must not meet)."""
+    d = robot.new_data()
+    mask = foot_ancestor_mask(robot)
+    first = [int(np.flatnonzero(mask[:, f])[0]) for f in range(2)]
+    hips = [d.xanchor[robot.joint_ids[j]] for j in first]
+    soles = 2.0 * max(f.sole_half[1] for f in robot.config.feet) + 0.01
+    return float(max(np.linalg.norm(hips[0][:2] - hips[1][:2]), soles))
+
+
+def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float) -> np.ndarray:
+    """(T, 2) contact labels in which a foot lifts off only after the other has been down for
+    ``overlap_s``: a phase whose foot would lift with the other foot in the air (a run's flight, a
+    jump) or just landed (a human walk's heel-up frames leave no double support) is extended until
+    the other foot has landed and ``overlap_s`` more, as long as ``min_swing_s`` of its next swing
+    is left (the ZMP then moves across a double support instead of jumping between the soles);
+    where that leaves no room before the other foot lands (a hop, a jump with both feet), the
+    foot stays down through to its next contact (the hop is dropped)."""
+    out = labels.copy()
+    T = len(out)
+    overlap, min_swing = max(1, int(round(overlap_s * fps))), max(1, int(round(min_swing_s * fps)))
+    for g, a, e in sorted(phases(labels), key=lambda r: r[2]):
+        if e >= T:
+            continue
+        nxt = np.flatnonzero(out[e:, g])
+        cap = e + int(nxt[0]) - min_swing if len(nxt) else T  # the next swing keeps min_swing
+        other = out[:, 1 - g]
+        if other[e - 1] and other[e]:  # the other foot stays down: since when
+            up = np.flatnonzero(~other[:e])
+            landing = int(up[-1]) + 1 if len(up) else 0
+        else:             # it is in the air, or lifts with this one (a jump): when it lands
+            down = np.flatnonzero(other[e:])
+            if not len(down):
+                continue
+            landing = e + int(down[0])
+        stop = min(landing + overlap, cap)
+        if stop <= landing and len(nxt):  # no room to wait for the other foot (a hop): no swing
+            stop = e + int(nxt[0])
+        if stop > e:
+            out[e:stop, g] = True
+    return out
+
+
+def filled(plan: ContactPlan, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """(T, 2, 4, 3) corner targets in every frame and (T, 2) support labels: a foot in the air
+    before its first contact phase (the human mid-stride at the cut) or after its last stands at
+    that phase's placement, so the pattern starts and ends standing."""
+    targets, contact = plan.targets.copy(), plan.labels.copy()
+    for f in range(2):
+        has = np.flatnonzero(~np.isnan(targets[:, f, 0, 0]))
+        if not len(has):
+            raise PatternError(f"{where}: the {('left', 'right')[f]} foot never stands on the floor, so there are no "
+                              "footsteps to walk (--legs steps); use --legs whole or stance")
+        a, b = int(has[0]), int(has[-1])
+        targets[:a, f], contact[:a, f] = targets[a, f], True
+        targets[b + 1:, f], contact[b + 1:, f] = targets[b, f], True
+        if np.isnan(targets[:, f, 0, 0]).any():  # every swing is planned (no speed cap): cannot happen
+            raise PatternError(f"{where}: a swing of the {('left', 'right')[f]} foot has no plan")
+    return targets, contact

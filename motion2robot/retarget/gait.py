@@ -1,0 +1,187 @@
+"""The ``steps`` alternative: the human's footsteps walked by a walking pattern, the upper body as retargeted.
+
+A whole-body retarget of a walk asks the robot for the human's stride and the human's balance
+strategy (heel-toe roll, momentum carried over the stance foot); a flat-footed robot of position
+servos can do neither, and the per-frame solve leaves acceleration spikes where the stance foot
+changes. This pipeline keeps what the robot can take from the human (when each foot steps, where
+it turns, the torso's heading, the arms and head) and regenerates the legs as a walking pattern,
+smooth by construction (after Nakaoka et al., IJRR 2007: leg motion regenerated for the robot,
+then a ZMP-based waist trajectory):
+
+1. the whole-body pipeline's first stages: the free solve (where the human's feet go) and the
+   pinned solve (the upper body tracking the human);
+2. footholds (:mod:`~.footholds`): a double support before every lift-off (runs and jumps are
+   walked; a human walk's heel-up frames leave none), the human's placements re-laid step by step, each step
+   shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
+   at the robot's own stance width; the contact plan's swings go straight between them, lifted
+   (:mod:`~.footsteps`); a foot in the air at either end of the clip stands at its nearest placement;
+3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the pinned
+   solve's low-passed and kept below what the legs reach (:func:`~.leg_tracker.root_height`);
+   the hinges of the upper body and head: the pinned solve's, smoothed within the servos' limits;
+4. a CoM path between the feet whose cart-table ZMP stays inside every frame's shrunk support
+   polygon (one QP over the clip: :func:`~.zmp_plan.cart_table_shift`);
+5. per frame, the root and the leg hinges (:class:`~.leg_tracker.LegTracker`) with every sole
+   corner on its plan and the CoM on its path: smooth targets give smooth joints;
+6. the multi-body ZMP of the result (arms and swing legs included) measured and the CoM path
+   shifted by the cart-table QP again, up to ZMP_ROUNDS tracking rounds in all.
+
+What the robot does differs from the human in stride length and path (reported in
+``meta["solver"]["steps"]``: the step factor, the stance width, the path covered); the policy of
+:mod:`~.executable` says so in ``meta["fallback"]``. Units: metres, radians, seconds; world frame
+z up; quaternions wxyz.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from motion2robot.motion.human import HumanMotion
+from motion2robot.retarget.constraints import support_planes
+from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
+from motion2robot.retarget.contacts import anchor_soles
+from motion2robot.retarget.footholds import filled, grounded, shorten_steps, stance_width, step_factor
+from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
+from motion2robot.retarget.result import StageFigures, robot_motion
+from motion2robot.retarget.setup import Setup, prepare
+from motion2robot.retarget.smoothing import low_pass, smooth_hinges
+from motion2robot.retarget.solve_stages import free_solve, pinned_solve
+from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, multibody_zmp
+from motion2robot.robot.chains import foot_ancestor_mask
+from motion2robot.robot.robot import Robot
+from motion2robot.robot_motion import RobotMotion
+
+#: Hz, cutoff of the root's heading (a walk's per-step turns of the feet are averaged out).
+ROOT_CUTOFF_HZ = 1.5
+#: Hz, cutoff of the reference CoM path the balance QP stays near.
+COM_CUTOFF_HZ = 1.0
+#: The longest step (fore-aft distance between consecutive placements) as a fraction of the
+#: straight leg's hip-to-sole distance; longer human steps are shortened to it (op3: 5 cm, where
+#: the Bandai walk's scaled stride asks 0.22 m between the feet).
+STEP_REACH = 0.18
+#: rad a foot may turn from the one it steps from (op3's hip yaws reach 0.45 rad either way).
+MAX_TURN = 0.35
+#: s of double support before every lift-off (the human's flight phases and heel-up frames leave
+#: none), and the least swing that is left (:func:`~.footholds.grounded`).
+OVERLAP_S = 0.2
+MIN_SWING_S = 0.2
+#: (lead, ramp) of the swings (:func:`~.footsteps.swing_path`): the foot rises over the first half
+#: and sets down over the second (the whole-body plan's 0.3 lifts within 0.12 s of a 0.4 s swing,
+#: a peak a 20 fps clip cannot show but a 100 fps one does), moving horizontally once a quarter in.
+SWING_SHAPE = (0.25, 0.5)
+#: s, weight of the CoM plan's jerk (:func:`~.zmp_plan.cart_table_shift`): the ZMP moves across
+#: the double support instead of jumping.
+JERK_TIME = 0.1
+#: Rounds of (CoM plan, tracking); the second and later correct by the measured multi-body ZMP.
+ZMP_ROUNDS = 3
+
+
+def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
+    """The ``steps`` pipeline on ``human`` at its own tempo (see the module text); ``options``:
+    the RetargetOptions of the whole-body stages it starts from."""
+    opt = replace(options, dynamic_balance=False)
+    t_all = time.perf_counter()
+    setup = prepare(human, robot, opt)
+    setup = replace(setup, labels=grounded(setup.labels, setup.fps, OVERLAP_S, MIN_SWING_S))
+    t_solve = time.perf_counter()
+    Q, free = free_solve(setup)
+    free_corners = setup.points(Q)[1]
+    Q, pinned = pinned_solve(setup, plan_contacts(setup, free_corners), Q)
+    longest = STEP_REACH * float(LegTracker(robot).straight_reach().min())
+    k = step_factor(anchor_soles(free_corners, setup.labels), setup.labels, longest)
+    width = stance_width(robot)
+    plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
+                         place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN),
+                         swing_shape=SWING_SHAPE)
+    Q, walked, figures = walk_pattern(setup, plan, Q)
+    pts = setup.points(Q)
+    solve_s = time.perf_counter() - t_solve
+    path = np.linalg.norm(np.diff(Q[:, :2], axis=0), axis=1).sum()
+    human_path = np.linalg.norm(np.diff(setup.kp[:, 0, :2], axis=0), axis=1).sum()
+    figures.update(step_factor=k, longest_step_m=longest, stance_width_m=width, path_m=float(path),
+                   human_path_m=float(human_path))
+    stages = StageFigures(free, pinned, 0, None, None, solve_s, time.perf_counter() - t_all)
+    # the keypoint error is the posture's: the human moved along the robot's (shortened) path, as
+    # the stance's is against the human held in place; the path itself is reported apart
+    along = setup.kp.copy()
+    along[..., :2] += (Q[:, :2] - setup.kp[:, 0, :2])[:, None, :]
+    motion = robot_motion(replace(setup, kp=along), walked, Q, pts, stages, False)
+    return motion.with_(meta={**motion.meta, "human_root_xy": setup.kp[:, 0, :2].tolist(),
+                              "solver": {**motion.meta["solver"], "steps": figures}})
+
+
+def yaw_pitch_roll(q: np.ndarray) -> np.ndarray:
+    """(T, 3) z-y-x Euler angles (rad; yaw unwrapped) of (T, 4) wxyz quaternions."""
+    w, x, y, z = q.T
+    yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    return np.stack([yaw, pitch, roll], axis=1)
+
+
+def quat_from_yaw_pitch_roll(a: np.ndarray) -> np.ndarray:
+    """(T, 4) wxyz quaternions of (T, 3) z-y-x Euler angles (rad)."""
+    cy, sy = np.cos(a[:, 0] / 2), np.sin(a[:, 0] / 2)
+    cp, sp = np.cos(a[:, 1] / 2), np.sin(a[:, 1] / 2)
+    cr, sr = np.cos(a[:, 2] / 2), np.sin(a[:, 2] / 2)
+    return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], axis=1)
+
+
+def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
+    """(T,) yaw (rad, unwrapped) between the two soles' headings (``corners`` (T, 2, 4, 3): front
+    corners first), low-passed at ROOT_CUTOFF_HZ: the upright pelvis of a walking pattern faces
+    where the feet do."""
+    fwd = corners[:, :, :2, :2].sum(axis=2) - corners[:, :, 2:, :2].sum(axis=2)     # (T, 2, 2)
+    yaw = np.unwrap(np.arctan2(fwd[..., 1], fwd[..., 0]), axis=0)
+    right = yaw[:, 1] + np.round((yaw[:, 0] - yaw[:, 1]) / (2 * np.pi)) * 2 * np.pi
+    return low_pass(((yaw[:, 0] + right) / 2)[:, None], fps, ROOT_CUTOFF_HZ)[:, 0]
+
+
+def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.ndarray, ContactPlan, dict]:
+    """Stages 3-6 of the module text on the pinned solve ``Q`` and the re-laid contact ``plan``:
+    the trajectory, the plan it stands on (every foot planned in every frame) and figures."""
+    robot, fps = setup.robot, setup.fps
+    tracker = LegTracker(robot)
+    corners, contact = filled(plan, setup.where)
+    planes, support = support_planes(np.where(contact[:, :, None, None], corners, np.nan), contact, plan.margin)
+    out = Q.copy()
+    out[:, 3:7] = quat_from_yaw_pitch_roll(np.stack([feet_heading(corners, fps), np.zeros(len(Q)), np.zeros(len(Q))], axis=1))
+    out[:, 2] = low_pass(Q[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
+    upper = np.flatnonzero(~foot_ancestor_mask(robot).any(axis=1))
+    if len(upper):
+        # the pinned solve's per-frame noise filtered as the whole-body pipeline's last stage does
+        # (the same cutoff in Hz at any rate), then rounded off to what the servos can follow
+        lo, hi = robot.lower[upper], robot.upper[upper]
+        out[:, 7 + upper] = smooth_hinges(low_pass(Q[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
+                                          setup.servo[1][upper], fps, robot.velocity_limit[upper], lo, hi)
+    # the CoM plan: near the feet's midpoint, its cart-table ZMP inside every frame's support polygon
+    com_pinned = setup.points(Q)[2]
+    com_ref = low_pass(corners[..., :2].mean(axis=(1, 2)), fps, COM_CUTOFF_HZ)   # between the feet
+    com_z = low_pass(com_pinned[:, 2:3] - Q[:, 2:3] + out[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
+    acc = np.gradient(np.gradient(com_ref, axis=0), axis=0) * fps ** 2
+    zmp0 = com_ref - (com_z / GRAVITY)[:, None] * acc   # the reference path's own cart-table ZMP
+    shift, slack = cart_table_shift(zmp0, com_z, planes, support, fps, JERK_TIME)
+    target = com_ref + shift
+    # the root starts where the CoM plan puts it (the pinned solve's own root follows the human's
+    # stride, not the shortened one), and its height comes down to what the legs reach from there
+    out[:, :2] = target + np.median(Q[:, :2] - com_pinned[:, :2], axis=0)
+    out[:, 2] = root_height(tracker, out, corners, fps)
+    plan_q = out.copy()
+    figures = {"rounds": 0, "cart_table_slack_m": float(slack.max(initial=0.0))}
+    for k in range(ZMP_ROUNDS):
+        out, err = tracker.solve(plan_q, corners, target, fps, out if k else None)  # each round from the same plan
+        figures["rounds"] = k + 1
+        figures["tracking_error_m"] = float(err.max())
+        if k == ZMP_ROUNDS - 1 or err.max() > LOST:
+            break
+        zmp, com = multibody_zmp(out, fps, robot)
+        d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps, JERK_TIME)
+        if np.abs(d).max() < MIN_SHIFT:
+            break
+        target = target + d
+    walked = replace(plan, labels=contact, pinned=np.ones_like(contact), targets=corners,
+                     soles=np.where(contact[:, :, None, None], corners, np.nan), planes=planes, support=support)
+    return out, walked, figures

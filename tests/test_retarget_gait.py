@@ -1,0 +1,186 @@
+"""The ``steps`` legs mode: footholds re-laid within the robot's reach, the leg tracker, and a real
+walk walked by the pattern (feet held, lifted, balanced, smooth at a finer rate)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motion2robot.cli import main
+from motion2robot.motion import read_motion
+from motion2robot.motion.ops import trim
+from motion2robot.retarget import RetargetOptions, retarget
+from motion2robot.retarget.footholds import grounded, shorten_steps, stance_width, step_factor
+from motion2robot.retarget.gait import quat_from_yaw_pitch_roll, yaw_pitch_roll
+from motion2robot.retarget.leg_tracker import LegTracker, _envelope_below
+from motion2robot.robot import load_robot
+from motion2robot.robot.chains import foot_ancestor_mask
+from motion2robot.validate import CheckOptions, check
+from tests._shared import MOTIONS, requires_shared
+
+
+@pytest.fixture(scope="module")
+def op3():
+    return load_robot("op3")
+
+
+def _sole(x, y, yaw=0.0, half=(0.06, 0.04)):
+    c, s = np.cos(yaw), np.sin(yaw)
+    local = np.array([[half[0], half[1]], [half[0], -half[1]], [-half[0], -half[1]], [-half[0], half[1]]])
+    xy = local @ np.array([[c, s], [-s, c]]) + [x, y]
+    return np.concatenate([xy, np.zeros((4, 1))], axis=1)
+
+
+def _walk(stride=0.4, n=4, width=0.04, yaws=None):
+    """Placements of a straight walk along +x: alternating feet, each phase 10 frames with 5 frames
+    of swing between a foot's phases; both feet down for the first 10 frames."""
+    T = 10 + 10 * n + 10
+    soles = np.full((T, 2, 4, 3), np.nan)
+    labels = np.zeros((T, 2), bool)
+    soles[:10, 0], soles[:10, 1] = _sole(0.0, width / 2), _sole(0.0, -width / 2)
+    labels[:10] = True
+    for i in range(n):
+        f = i % 2
+        a = 10 + 10 * i
+        x = (i + 1) * stride / 2
+        yaw = 0.0 if yaws is None else yaws[i]
+        prev = np.flatnonzero(labels[:a, f])[-1]
+        labels[prev + 1:a + 5, f] = False
+        soles[a + 5:a + 20, f] = _sole(x, (width / 2) * (1 if f == 0 else -1), yaw)
+        labels[a + 5:a + 20, f] = True
+    labels[:, :][np.isnan(soles[..., 0, 0])] = False
+    return soles, labels
+
+
+def _centres(soles, labels):
+    from motion2robot.retarget.contacts import phases
+
+    return [(f, a, soles[a, f].mean(axis=0)[:2]) for f, a, b in sorted(phases(labels), key=lambda r: r[1])]
+
+
+def test_steps_are_shortened_to_the_reach_and_the_feet_kept_a_stance_width_apart():
+    soles, labels = _walk(stride=0.4, width=0.04)
+    k = step_factor(soles, labels, 0.05)
+    assert k == pytest.approx(0.05 / 0.2)  # steps of 0.2 m between the feet
+    out = shorten_steps(soles, labels, k, width=0.09, max_turn=0.35)
+    laid = _centres(out, labels)
+    for (f0, _, c0), (f1, _, c1) in zip(laid[1:], laid[2:]):
+        if f0 != f1:
+            assert abs(c1[0] - c0[0]) == pytest.approx(0.05, abs=1e-9)   # shortened
+            assert abs(c1[1] - c0[1]) == pytest.approx(0.09, abs=1e-9)   # a stance width apart
+    yaw = [np.arctan2(*(o[0, :2] + o[1, :2] - o[2, :2] - o[3, :2])[::-1]) for o in out[labels[:, 0], 0]]
+    assert np.allclose(yaw, 0.0)  # straight walk: the feet still point ahead
+
+
+def test_turns_are_kept_within_what_the_hips_can_twist():
+    soles, labels = _walk(yaws=[0.8, 0.8, 1.6, 1.6])  # the human turns 0.8 rad per step pair
+    out = shorten_steps(soles, labels, 0.5, width=0.09, max_turn=0.35)
+    laid = [(f, a) for f, a, _ in _centres(out, labels)]
+
+    def yaw(f, a):
+        s = out[a, f]
+        return np.arctan2(*(s[0, :2] + s[1, :2] - s[2, :2] - s[3, :2])[::-1])
+
+    for (f0, a0), (f1, a1) in zip(laid, laid[1:]):
+        if a1 > a0:
+            assert abs(yaw(f1, a1) - yaw(f0, a0)) <= 0.35 + 1e-9
+    assert yaw(*laid[-1]) > 0.6  # the heading is caught up over the steps
+
+
+def test_every_lift_off_waits_for_a_double_support():
+    labels = np.zeros((40, 2), bool)
+    labels[:10, 0] = True      # left down, then flight 10-15, right lands at 15
+    labels[15:30, 1] = True    # right down 15-29, left lands at 30 as right lifts: no double support
+    labels[30:40, 0] = True
+    out = grounded(labels, fps=20.0, overlap_s=0.1, min_swing_s=0.1)
+    assert out.any(axis=1).all()
+    assert out[10:17, 0].all() and not out[17:30, 0].any()   # left stays until right lands + 2 frames
+    assert out[15:32, 1].all() and not out[32:, 1].any()     # right lifts 2 frames after left lands
+    jump = np.zeros((30, 2), bool)
+    jump[:10], jump[16:] = True, True                          # both feet leave at 10, land at 16
+    out = grounded(jump, fps=20.0, overlap_s=0.1, min_swing_s=0.1)
+    assert out.any(axis=1).all() and out[10:18].any(axis=1).all()
+    near = np.zeros((40, 2), bool)
+    near[:20, 0], near[21:40, 0], near[:40, 1] = True, True, False
+    near[:3, 1] = True
+    assert (grounded(near, 20.0, 0.1, 0.1)[20] == near[20]).all()  # no landing to wait for: unchanged
+
+
+def test_stance_width_keeps_op3_soles_apart(op3):
+    width = stance_width(op3)
+    sole_width = 2 * max(f.sole_half[1] for f in op3.config.feet)
+    assert width >= sole_width + 0.01 - 1e-12
+
+
+def test_envelope_stays_below_its_bound_and_is_smooth():
+    t = np.arange(400) / 30.0
+    bound = 0.25 - 0.02 * (np.sin(2 * np.pi * 1.3 * t) > 0.7)   # dips of 2 cm, sharp edges
+    out = _envelope_below(bound, 12, 30.0)
+    assert (out <= bound + 1e-4).all()
+    acc = np.abs(np.diff(out, 2)) * 30.0 ** 2
+    assert acc.max() < 0.5   # m/s^2: the sharp dips become gentle
+
+
+def test_euler_round_trip():
+    rng = np.random.default_rng(3)
+    a = np.stack([rng.uniform(-3, 3, 50), rng.uniform(-1.2, 1.2, 50), rng.uniform(-3, 3, 50)], axis=1)
+    back = yaw_pitch_roll(quat_from_yaw_pitch_roll(a))
+    back[:, 0] = np.angle(np.exp(1j * back[:, 0]))
+    np.testing.assert_allclose(np.angle(np.exp(1j * (back - a))), 0.0, atol=1e-9)
+
+
+def test_leg_tracker_reaches_the_robot_s_own_feet_and_com(op3):
+    """Targets from a known posture: the tracker finds a posture whose sole corners and CoM are on
+    them within 0.1 mm, starting from the nominal pose."""
+    import mujoco
+
+    q = np.asarray(op3.nominal_qpos, float).copy()
+    tr = LegTracker(op3)
+    q[tr.qadr] += np.random.default_rng(0).uniform(-0.15, 0.15, len(tr.qadr))
+    q[tr.qadr] = np.clip(q[tr.qadr], tr.lo + 0.2, tr.hi - 0.2)
+    d = mujoco.MjData(op3.model)
+    d.qpos[:] = q
+    mujoco.mj_kinematics(op3.model, d)
+    mujoco.mj_comPos(op3.model, d)
+    corners = d.site_xpos[np.asarray(op3.sole_sites)].reshape(1, 2, 4, 3).copy()
+    com = d.subtree_com[op3.root_body, :2].reshape(1, 2).copy()
+    start = np.asarray(op3.nominal_qpos, float)[None].copy()
+    start[0, :3] = q[:3]
+    out, err = tr.solve(start, corners, com, 30.0)
+    assert err[0] < 1e-4
+
+
+@requires_shared
+def test_a_real_walk_is_walked_feet_held_lifted_and_balanced(op3):
+    """The Bandai walk (trimmed) as steps at x2.5: every check passes (planted soles below 1 cm/s at
+    every corner, swing feet clear, ZMP inside, torques, physics playback), the robot goes forward,
+    and the 100 fps version shows no new spike."""
+    human = trim(read_motion(MOTIONS / "bvh" / "bandai_walk_normal_001.bvh")[0], 0, 90)
+    motion = retarget(human, op3, RetargetOptions(tempo=2.5, legs="steps"))
+    report = check(motion, op3, CheckOptions())
+    assert report.feasible, report.reasons
+    walk = motion.meta["solver"]["steps"]
+    assert walk["tracking_error_m"] < 0.005
+    assert motion.qpos[-1, 0] - motion.qpos[0, 0] > 0.1   # it walks forward
+    swing = np.asarray(motion.meta["contacts"], bool)
+    assert (~swing).any(axis=0).all()                       # both feet step
+
+    # smooth by construction: at 100 fps the root's jerk stays below 50 m/s^3 (its acceleration
+    # does not jump where the support changes: the ZMP moves across a double support; a jump of
+    # 1 m/s^2 in a frame is 100), and the legs' peak accelerations stay within 1.5x of the native rate's
+    fine = retarget(human, op3, RetargetOptions(tempo=2.5, legs="steps", fps=100.0))
+    acc = np.diff(fine.qpos, 2, axis=0) * fine.fps ** 2
+    assert np.abs(np.diff(acc[:, :3], axis=0)).max() * fine.fps < 50.0   # m/s^3: no jump (was 83 in one frame)
+    legs = 7 + np.flatnonzero(foot_ancestor_mask(op3).any(axis=1))
+    native = np.abs(np.diff(motion.qpos[:, legs], 2, axis=0)).max() * motion.fps ** 2
+    assert np.abs(acc[:, legs]).max() <= 1.5 * native
+
+
+@requires_shared
+def test_cli_legs_steps(tmp_path, capsys):
+    src = MOTIONS / "bvh" / "bandai_walk-back_normal_001.bvh"
+    out = tmp_path / "w.npz"
+    code = main(["retarget", str(src), "--legs", "steps", "--tempo", "2.5", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert out.exists() and code in (0, 1)
+    assert "steps" in text
