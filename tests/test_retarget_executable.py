@@ -65,20 +65,25 @@ def test_a_walk_becomes_feasible_under_auto_and_says_how(op3):
     # whatever it took is in the meta: the attempts, the tempo, the alternative and why
     assert motion.meta["attempts"][0] == {"legs": "whole", "tempo": 1.0, "feasible": False,
                                           "failed": motion.meta["attempts"][0]["failed"]} or motion.meta["fallback"] is None
-    if motion.meta["fallback"]:
-        assert motion.meta["fallback"]["mode"] == "stance" and "whole-body" in motion.meta["fallback"]["why"]
+    # the robot walks it: the human's footsteps as a walking pattern, not a stance
+    fb = motion.meta["fallback"]
+    assert fb["mode"] == "steps" and "whole fails" in fb["why"] and "shortened to" in fb["what"], fb
+    walk = motion.meta["solver"]["steps"]
+    assert 0.05 < walk["step_factor"] < 1.0 and walk["path_m"] > 0.1
     assert report.figures["tempo"] == motion.meta["tempo"]
     assert check(motion, op3).feasible  # the saved motion passes on its own
 
 
 @requires_shared
-def test_a_run_takes_the_stance_alternative_and_says_why(op3):
+def test_a_run_is_walked_with_a_foot_always_down_and_says_why(op3):
     human = read_motion(MOTIONS / "bvh" / "bandai_run_normal_001.bvh")[0]
     motion = retarget(human, op3)
     fb = motion.meta["fallback"]
-    assert fb["mode"] == "stance" and "flight" in fb["why"]
-    assert [a["legs"] for a in motion.meta["attempts"]] == ["stance"] * len(motion.meta["attempts"])
+    assert fb["mode"] == "steps" and "flight" in fb["why"] and "a foot always on the floor" in fb["why"]
+    assert "whole" not in [a["legs"] for a in motion.meta["attempts"]]  # flight: the whole body is not tried
     assert motion.meta["executable"] is True
+    planted = np.asarray(motion.meta["contacts"], bool)
+    assert planted.any(axis=1).all()  # never both feet in the air
 
 
 @requires_shared

@@ -52,7 +52,7 @@ def _fake_check(monkeypatch, kinematic_ok: bool):
 
 
 def _solve(op3):
-    return lambda h: RobotMotion(np.tile(op3.model.qpos0, (h.num_frames, 1)), h.fps, op3.joint_names, op3.name)
+    return lambda h, legs: RobotMotion(np.tile(op3.model.qpos0, (h.num_frames, 1)), h.fps, op3.joint_names, op3.name)
 
 
 def test_a_returned_attempt_that_played_back_is_not_checked_again(monkeypatch, op3):

@@ -28,6 +28,8 @@ def _cap(value: str) -> float:
 
 
 def add_retarget_options(p: argparse.ArgumentParser) -> None:
+    from motion2robot.retarget.options import LEGS
+
     """--tempo, --tempo-cap, --legs, --no-balance."""
     p.add_argument("--tempo", type=_tempo, default="auto", metavar="human|similar|auto|K",
                    help="timing of the robot motion: 'human' keeps the generated timing, 'similar' plays it "
@@ -35,9 +37,11 @@ def add_retarget_options(p: argparse.ArgumentParser) -> None:
                         "the smallest slow-down that passes the checks, or a factor K (2 = twice as slow)")
     p.add_argument("--tempo-cap", type=_cap, default=None, metavar="K",
                    help="the slowest tempo 'auto' may choose (default 2.5)")
-    p.add_argument("--legs", choices=["auto", "whole", "stance"], default="auto",
-                   help="'whole' body, 'stance' (the legs hold a stance while the upper body and head perform), "
-                        "or 'auto' (default: whole body unless only the stance passes the checks; always reported)")
+    p.add_argument("--legs", choices=list(LEGS), default="auto",
+                   help="'whole' body, 'steps' (the legs walk the human's footsteps as a walking pattern, steps "
+                        "shortened to what the robot reaches, torso upright), 'stance' (the legs hold a stance while "
+                        "the upper body and head perform), or 'auto' (default: the first of whole, steps, stance "
+                        "that passes the checks; always reported)")
     p.add_argument("--no-balance", dest="balance", action="store_false",
                    help="do not keep the CoM/ZMP over the support polygon (running, jumping)")
 

@@ -83,8 +83,8 @@ def _fixed_like(opts, src: RobotMotion):
     """The options with the tempo and legs the source's policies chose (so frames line up)."""
     tempo = src.meta.get("tempo")
     legs = (src.meta.get("fallback") or {}).get("mode") if isinstance(src.meta.get("fallback"), dict) else None
-    if legs not in ("whole", "stance"):
-        legs = opts.legs if getattr(opts, "legs", "auto") in ("whole", "stance") else "whole"
+    if legs not in ("whole", "steps", "stance"):
+        legs = opts.legs if getattr(opts, "legs", "auto") in ("whole", "steps", "stance") else "whole"
     changes = {"legs": legs}
     if isinstance(tempo, (int, float)):
         changes["tempo"] = float(tempo)

@@ -21,7 +21,8 @@
    the stance sole neither slides nor spins;
 9. result (:mod:`~.result`): per-frame figures into ``meta["solver"]``.
 
-:func:`retarget` wraps :func:`whole_body` in the tempo and legs policy of
+:func:`retarget` wraps :func:`whole_body` (or the ``steps`` pattern of :mod:`~.gait`, or the
+``stance`` of :mod:`~.stance`: :func:`solve_legs`) in the tempo and legs policy of
 :mod:`~motion2robot.retarget.executable` (attempts judged by ``check``).
 """
 
@@ -36,11 +37,13 @@ from motion2robot.retarget.balance_stage import dynamic_balance
 from motion2robot.retarget.contact_plan import plan_contacts
 from motion2robot.retarget.executable import plan
 from motion2robot.retarget.finite import check_solution
+from motion2robot.retarget.gait import steps
 from motion2robot.retarget.options import LEGS, RetargetOptions
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.root_pass import root_shift
 from motion2robot.retarget.setup import prepare, require_solvable
 from motion2robot.retarget.solve_stages import free_solve, joint_smoothing, pinned_solve, servo_rounds
+from motion2robot.retarget.stance import stance
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -64,7 +67,17 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
         human = resample(human, opt.fps)
     require_solvable(human)
     inner = replace(opt, fps=None)
-    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, lambda h: whole_body(h, robot, inner), check_options)
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, lambda h, legs: solve_legs(h, robot, inner, legs),
+                check_options)
+
+
+def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs: str) -> RobotMotion:
+    """The robot motion of one legs mode at the human's own tempo: ``whole`` body
+    (:func:`whole_body`), ``steps`` (:func:`~.gait.steps`) or ``stance``
+    (:func:`~.stance.stance`, then the whole body)."""
+    if legs == "steps":
+        return steps(human, robot, options)
+    return whole_body(stance(human) if legs == "stance" else human, robot, options)
 
 
 def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:

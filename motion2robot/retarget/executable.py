@@ -9,13 +9,19 @@ attempt that passes, in this order:
    steps between are skipped), else the smallest of :data:`~.tempo.AUTO_STEPS` that passes; not
    tried when x1.0 fails a check no tempo changes (:data:`TEMPO_PROOF`: limits, self-collision,
    the feet on the floor, unless the foot plan left swings free as too fast for this tempo);
-3. the ``stance`` alternative (:mod:`~.stance`: legs in a fixed stance, upper body and head
-   perform), at x1.0, then slowed the same way. Clips with flight phases (runs, jumps) start here:
-   a flat-footed robot of servos cannot make the take-off impulse.
+3. the alternatives, each at x1.0, then slowed the same way: ``steps`` (:mod:`~.gait`: the
+   human's footsteps walked by a walking pattern, steps shortened to what the robot's legs reach,
+   the CoM planned so the ZMP stays in the soles, the upper body and head as retargeted) and
+   ``stance`` (:mod:`~.stance`: legs in a fixed stance, upper body and head perform). A clip whose
+   pelvis travels (more than TRAVEL_M from where it starts) tries ``steps`` first: walking is the
+   nearest thing to it; one that stays in place tries ``stance`` first, which keeps its tempo more
+   often. ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
+   the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
+   them with a foot always on the floor.
 
 Nothing is silent: the result's meta says the tempo factor (``tempo``, 1.0 = as generated), why
 (``tempo_reason``), the alternative taken (``fallback``: None, or {"mode", "why"}) and whether the
-chosen attempt passed (``executable``). When no attempt passes, the last one (stance at the cap)
+chosen attempt passed (``executable``). When no attempt passes, the last one tried (at the cap)
 is returned with ``executable`` False and the reason.
 """
 
@@ -24,15 +30,24 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.contacts import contact_labels
+from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
-from motion2robot.retarget.stance import has_flight, stance
+from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
-Solve = Callable[[HumanMotion], RobotMotion]
+#: (human motion at the attempt's tempo, legs mode) -> robot motion.
+Solve = Callable[[HumanMotion, str], RobotMotion]
+#: Legs modes ``auto`` may try (their order: :func:`auto_legs`).
+AUTO_LEGS = ("whole", "steps", "stance")
+#: m (human): a pelvis that goes farther than this from where it starts travels (a walk, not a
+#: motion in place).
+TRAVEL_M = 0.5
 
 #: Checks a slower tempo cannot make pass (the same postures, only slower): an attempt failing any
 #: of them is not tried slower.
@@ -114,31 +129,75 @@ def _words(failed: list[str]) -> str:
     return ", ".join(failed) if failed else "nothing"
 
 
+def auto_legs(human: HumanMotion, labels: np.ndarray, flight: bool) -> list[str]:
+    """The legs modes ``auto`` tries on ``human`` (contact ``labels`` (T, 2)), in order (see the
+    module text)."""
+    from motion2robot.motion.human import KP
+    from motion2robot.retarget.contacts import phases
+
+    steps = any(sum(1 for g, _, _ in phases(labels) if g == f) > 1 for f in range(labels.shape[1]))
+    pelvis = np.asarray(human.positions)[:, KP["pelvis"], :2]
+    travels = bool(np.linalg.norm(pelvis - pelvis[0], axis=1).max() > TRAVEL_M)
+    order = ["steps", "stance"] if travels else ["stance", "steps"]
+    return [m for m in ([] if flight else ["whole"]) + order if m != "steps" or steps]
+
+
+def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot) -> dict | None:
+    """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
+    if final.legs == "whole":
+        return None
+    if legs == final.legs:
+        why = f"asked for (--legs {legs})"
+    elif flight:
+        why = (f"the human motion has flight phases (both feet off the floor), which {robot.name}'s servos "
+               "cannot produce" + ("; its steps are walked with a foot always on the floor" if final.legs == "steps"
+                                   else ""))
+    else:
+        why = "; ".join(f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
+                        for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode]) and mode != final.legs)
+    if final.legs == "steps":
+        walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
+        what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
+                f"{100 * walk.get('step_factor', 1.0):.0f} % of the human's (scaled) length, the feet "
+                f"{100 * walk.get('stance_width_m', 0.0):.1f} cm apart, the pelvis upright, the CoM planned so the "
+                "ZMP stays in the soles; the upper body and head perform")
+    else:
+        what = ("the legs keep a fixed double-support stance at the clip's first heading; "
+                "the upper body and head perform")
+    return {"mode": final.legs, "why": why, "what": what}
+
+
 def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
          check_options: object | None = None) -> tuple[RobotMotion, object | None]:
     """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
-    attempt, not judged). ``check_options``: the judge's CheckOptions (default: every check with
-    the physics playback). See the module text for the order of attempts."""
+    attempt, not judged). ``solve(human, legs)``: the robot motion of a legs mode at the human's
+    tempo; ``check_options``: the judge's CheckOptions (default: every check with the physics
+    playback). See the module text for the order of attempts."""
     factors = _factors(tempo, cap, human, robot)
     judging = tempo == "auto" or legs == "auto"
     judge = _judge(robot, check_options) if judging else (lambda motion: None)
     flight = False
-    modes = [legs] if legs in ("whole", "stance") else ["whole", "stance"]
+    modes = [legs]
     if legs == "auto":
         labels, _ = contact_labels(human)
         flight = has_flight(human, labels)
-        if flight:
-            modes = ["stance"]
+        modes = auto_legs(human, labels, flight)
 
     def attempt(mode: str, k: float) -> Attempt:
-        h = stance(human) if mode == "stance" else human
-        motion = solve(stretch(h, k))
+        motion = solve(stretch(human, k), mode)
         return Attempt(mode, k, motion, judge(motion))
 
     tried: list[Attempt] = []
     chosen = None
+    skipped: list[dict] = []
     for mode in modes:
-        ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors)
+        try:
+            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors)
+        except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
+            if legs != "auto":
+                raise
+            skipped.append({"legs": mode, "skipped": str(err)})
+            continue
         tried += runs
         if ok is not None:
             chosen = ok
@@ -147,7 +206,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
                   "executable": None if final.report is None else final.feasible,
                   "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
-                                "failed": a.failed()} for a in tried]}
+                                "failed": a.failed()} for a in tried] + skipped}
     if final.report is None:
         meta["tempo_reason"] = (f"played x{final.factor:.2f} as asked (--tempo {tempo})" if final.factor != 1.0
                                 else "played at the generated tempo (x1.00)")
@@ -160,21 +219,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         base = next(a for a in tried if a.legs == final.legs)
         meta["tempo_reason"] = (f"slowed x{final.factor:.2f}, the smallest slow-down tried that passes "
                                 f"(at x{base.factor:.2f} {_words(base.failed())} failed)")
-    if final.legs == "stance":
-        if legs == "stance":
-            why = "asked for (--legs stance)"
-        elif flight:
-            why = (f"the human motion has flight phases (both feet off the floor), which {robot.name}'s servos "
-                   "cannot produce")
-        else:
-            whole = [a for a in tried if a.legs == "whole"]
-            why = (f"whole-body execution fails at every tempo tried up to x{whole[-1].factor:.2f} "
-                   f"({_words(whole[-1].failed())})")
-        meta["fallback"] = {"mode": "stance", "why": why,
-                            "what": "the legs keep a fixed double-support stance at the clip's first heading; "
-                                    "the upper body and head perform"}
-    else:
-        meta["fallback"] = None
+    meta["fallback"] = _fallback(final, legs, flight, tried, robot)
     if (chosen is None and final.report is not None and judging
             and needs_full_check(final.report, check_options)):  # the full report of what is returned
         final = Attempt(final.legs, final.factor, final.motion, _judge_full(robot, check_options)(final.motion))

@@ -10,7 +10,7 @@ from motion2robot.retarget.scale import Scale
 from motion2robot.retarget.tempo import DEFAULT_CAP, parse_cap, parse_tempo
 
 #: What ``legs`` may be.
-LEGS = ("auto", "whole", "stance")
+LEGS = ("auto", "whole", "steps", "stance")
 
 
 @dataclass(frozen=True)
@@ -37,9 +37,9 @@ class RetargetOptions:
     dynamic_balance: with balance, a ZMP planning stage after the whole-body solve keeps the
     multi-body ZMP inside the shrunk support polygons (:mod:`~motion2robot.retarget.zmp_plan`).
     tempo: "human" | "similar" | "auto" | a slow-down factor (:mod:`~motion2robot.retarget.tempo`);
-    tempo_cap: the slowest ``auto`` may go; legs: "whole" | "stance" | "auto" (whole body, the
-    stance alternative of :mod:`~motion2robot.retarget.stance`, or whole body unless only the
-    stance passes); with "auto" in either, the result is judged by ``check`` and the policy of
+    tempo_cap: the slowest ``auto`` may go; legs: "whole" | "steps" | "stance" | "auto" (whole
+    body, the walking pattern of :mod:`~motion2robot.retarget.gait`, the stance alternative of
+    :mod:`~motion2robot.retarget.stance`, or the first of them that passes); with "auto" in either, the result is judged by ``check`` and the policy of
     :mod:`~motion2robot.retarget.executable` picks the attempt. lift_feet: every sole follows the
     plan of :mod:`~motion2robot.retarget.footsteps` (stance pinned, swings lifted clear of the floor
     and of the other foot); off = soles pinned in contact frames only, free otherwise."""
