@@ -3,7 +3,7 @@
 Counts, the executable share, the failing checks and reasons and the trajectory error come from
 :func:`motion2robot.batch.summary.summarize` itself, so they are ``batch-report``'s figures on the
 same rows. Added here: the tempo factor of the executable samples (median, p90), the share that
-needed the ``stance`` fallback, the fidelity means (:mod:`~motion2robot.score.fidelity`) and the
+needed an alternative for the legs (``steps`` or ``stance``), the fidelity means (:mod:`~motion2robot.score.fidelity`) and the
 throughput. Every figure but the throughput (``cpu_s_per_sample``, ``samples_per_min_per_core``)
 is a function of the inputs only.
 """

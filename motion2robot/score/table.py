@@ -66,7 +66,8 @@ def format_table(figures: Sequence[SetFigures], robot: str) -> str:
 
 def legend(robot: str) -> str:
     return (f"executable: passes every check on {robot}, physics playback included unless --no-physics; tempo: "
-            "slow-down the executable samples needed (x1.00 = as generated); fallback: legs in a fixed stance; "
+            "slow-down the executable samples needed (x1.00 = as generated); fallback: the legs on an alternative "
+            "(steps: the robot's own walking pattern of the human's footsteps; stance: a fixed stance); "
             "keypoint error: robot vs the human scaled to the robot, mean over frames and keypoints, in the world "
             "(path) and pelvis on pelvis (pose); contact "
             "agreement: (frame, foot) pairs where the robot's foot contact matches the human's labels")
