@@ -39,7 +39,7 @@ from dataclasses import replace
 import numpy as np
 
 from motion2robot.motion.human import HumanMotion
-from motion2robot.retarget.constraints import support_planes
+from motion2robot.retarget.constraints import support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
 from motion2robot.retarget.contacts import anchor_soles
 from motion2robot.retarget.footholds import filled, grounded, shorten_steps, stance_width, step_factor
@@ -182,6 +182,12 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.nda
         if np.abs(d).max() < MIN_SHIFT:
             break
         target = target + d
+    zmp, _ = multibody_zmp(out, fps, robot)
+    ok = support & np.isfinite(zmp).all(axis=1)
+    outside = np.maximum(0.0, -support_margin(np.nan_to_num(zmp[ok]), planes[ok]))
+    figures["zmp_outside_shrunk_soles_m"] = float(outside.max(initial=0.0))
+    # the plan it stands on; no static CoM rule (a walking pattern balances by its ZMP, above)
     walked = replace(plan, labels=contact, pinned=np.ones_like(contact), targets=corners,
-                     soles=np.where(contact[:, :, None, None], corners, np.nan), planes=planes, support=support)
+                     soles=np.where(contact[:, :, None, None], corners, np.nan), planes=planes,
+                     support=np.zeros_like(support))
     return out, walked, figures
