@@ -20,6 +20,8 @@ import numpy as np
 
 import motion2robot.retarget.api as rapi
 import motion2robot.retarget.executable as ex
+import motion2robot.retarget.gait as gait
+import motion2robot.retarget.leg_tracker as leg_tracker
 import motion2robot.validate as vpkg
 import motion2robot.validate.api as vapi
 import motion2robot.validate.context as vctx
@@ -59,8 +61,11 @@ def instrument() -> None:
               "dynamic_balance", "root_shift", "robot_motion"):
         timed(rapi, n, f"retarget: {n}")
     timed(rapi, "whole_body", "retarget: whole_body (all stages)", "solve")
+    timed(rapi, "steps", "retarget: steps pattern (all stages)", "solve")
+    timed(gait, "walk_pattern", "retarget: steps: walk pattern (CoM plan, leg tracking)")
+    timed(leg_tracker.LegTracker, "solve", "retarget: steps: leg tracker")
     timed(ex, "stretch", "policy: tempo stretch")
-    timed(ex, "stance", "policy: stance rewrite")
+    timed(rapi, "stance", "policy: stance rewrite")
     timed(vctx, "compute_kinematics", "check: per-frame MuJoCo pass")
     timed(vctx, "inverse_dynamics", "check: inverse dynamics")
     timed(vapi, "kinematic_checks", "check: kinematic checks")

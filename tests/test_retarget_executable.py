@@ -191,3 +191,50 @@ def test_a_clip_that_never_touches_the_floor_is_one_line_and_exit_2(tmp_path, ca
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and "floor" in err
     assert not (tmp_path / "f.npz").exists()
+
+
+def test_auto_legs_order_follows_the_clip():
+    """Whole body first; a travelling clip tries steps before the stance, one in place the stance
+    first; no steps without a step; flight skips the whole body."""
+    from motion2robot.motion.human import HumanMotion
+    from motion2robot.retarget.executable import auto_legs
+
+    T = 40
+    pos = np.zeros((T, 22, 3))
+    walk = HumanMotion(pos + np.linspace(0, 1.0, T)[:, None, None] * [1.0, 0.0, 0.0], 20.0)   # pelvis goes 1 m
+    still = HumanMotion(pos.copy(), 20.0)
+    stepping = np.zeros((T, 2), bool)
+    stepping[:10, 0] = stepping[20:, 0] = True
+    stepping[:, 1] = True
+    standing = np.ones((T, 2), bool)
+    assert auto_legs(walk, stepping, False) == ["whole", "steps", "stance"]
+    assert auto_legs(still, stepping, False) == ["whole", "stance", "steps"]
+    assert auto_legs(walk, standing, False) == ["whole", "stance"]
+    assert auto_legs(walk, stepping, True) == ["steps", "stance"]
+
+
+def test_ascending_search_stops_at_the_first_tempo_that_passes():
+    from motion2robot.retarget.executable import Attempt, _search
+
+    class Report:
+        def __init__(self, ok, failed=()):
+            self.feasible, self.checks = ok, {n: {"ok": False} for n in failed}
+
+    class Motion:
+        meta: dict = {}
+
+    made = []
+
+    def make(k, passes_from=1.6):
+        made.append(k)
+        ok = k >= passes_from
+        return Attempt("steps", k, Motion(), Report(ok, () if ok else ("torque_limits",)))
+
+    ok, tried = _search(make, [1.0, 1.25, 1.6, 2.0, 2.5], ascending=True)
+    assert ok.factor == 1.6 and made == [1.0, 1.25, 1.6]
+    made.clear()
+    ok, tried = _search(make, [1.0, 1.25, 1.6, 2.0, 2.5])   # the default: the cap, then between
+    assert ok.factor == 1.6 and made == [1.0, 2.5, 1.25, 1.6]
+    made.clear()
+    ok, _ = _search(lambda k: make(k, passes_from=9.0), [1.0, 1.25, 2.5], ascending=True)
+    assert ok is None and made == [1.0, 1.25, 2.5]

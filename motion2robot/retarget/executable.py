@@ -9,7 +9,8 @@ attempt that passes, in this order:
    steps between are skipped), else the smallest of :data:`~.tempo.AUTO_STEPS` that passes; not
    tried when x1.0 fails a check no tempo changes (:data:`TEMPO_PROOF`: limits, self-collision,
    the feet on the floor, unless the foot plan left swings free as too fast for this tempo);
-3. the alternatives, each at x1.0, then slowed the same way: ``steps`` (:mod:`~.gait`: the
+3. the alternatives, each at x1.0, then slowed (the stance as above, ``steps`` one factor at a
+   time, stopping at the first that passes): ``steps`` (:mod:`~.gait`: the
    human's footsteps walked by a walking pattern, steps shortened to what the robot's legs reach,
    the CoM planned so the ZMP stays in the soles, the upper body and head as retargeted) and
    ``stance`` (:mod:`~.stance`: legs in a fixed stance, upper body and head perform). A clip whose
@@ -105,14 +106,24 @@ def _factors(tempo: str | float, cap: float, human: HumanMotion, robot: Robot) -
     return [float(tempo)]
 
 
-def _search(make: Callable[[float], Attempt], factors: list[float]) -> tuple[Attempt | None, list[Attempt]]:
+def _search(make: Callable[[float], Attempt], factors: list[float],
+            ascending: bool = False) -> tuple[Attempt | None, list[Attempt]]:
     """The first passing attempt in ``factors`` order, trying the first, then the last, then the
-    ones between (a slower tempo passing is what makes the ones between worth trying)."""
+    ones between (a slower tempo passing is what makes the ones between worth trying); with
+    ``ascending``, the first, then each slower one in turn (cheaper where a small slow-down
+    suffices, as for the ``steps`` pattern, whose accelerations fall steadily with the tempo)."""
     tried: list[Attempt] = []
     first = make(factors[0])
     tried.append(first)
     if first.feasible or len(factors) == 1 or set(first.failed()) & tempo_proof(first.motion):
         return (first if first.feasible else None), tried
+    if ascending:
+        for k in factors[1:]:
+            a = make(k)
+            tried.append(a)
+            if a.feasible or set(a.failed()) & tempo_proof(a.motion):
+                return (a if a.feasible else None), tried
+        return None, tried
     last = make(factors[-1])
     tried.append(last)
     if not last.feasible:
@@ -192,7 +203,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     skipped: list[dict] = []
     for mode in modes:
         try:
-            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors)
+            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors, ascending=mode == "steps")
         except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
             if legs != "auto":
                 raise
@@ -206,7 +217,9 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
                   "executable": None if final.report is None else final.feasible,
                   "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
-                                "failed": a.failed()} for a in tried] + skipped}
+                                "failed": a.failed()} for a in tried]}
+    if skipped:
+        meta["legs_skipped"] = skipped
     if final.report is None:
         meta["tempo_reason"] = (f"played x{final.factor:.2f} as asked (--tempo {tempo})" if final.factor != 1.0
                                 else "played at the generated tempo (x1.00)")
