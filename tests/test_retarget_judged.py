@@ -78,3 +78,24 @@ def test_needs_full_check():
     assert not needs_full_check(played, None)
     assert not needs_full_check(skipped, CheckOptions(physics=False))  # a full check would skip it too
     assert not needs_full_check(_report(SimpleNamespace(num_frames=1), False, played=False), None)
+
+
+def test_when_nothing_passes_the_attempt_failing_fewest_checks_is_returned(monkeypatch, op3):
+    """A steps attempt failing five checks after a stance failing only the playback: the stance is
+    returned (it used to be whichever came last)."""
+    def check(motion, robot, options=None, *, physics_if_feasible=False):
+        many = motion.meta.get("legs") == "steps"
+        checks = {n: {"ok": not many, "frames": []} for n in ("velocity_limits", "torque_limits", "ground", "balance")}
+        checks["rollout"] = {"ok": False, "frames": [], "fell": True}
+        return SimpleNamespace(feasible=False, checks=checks, figures={}, frames=motion.num_frames)
+
+    monkeypatch.setattr(validate, "check", check)
+
+    def solve(h, legs):
+        m = RobotMotion(np.tile(op3.model.qpos0, (h.num_frames, 1)), h.fps, op3.joint_names, op3.name)
+        return m.with_(meta={"legs": legs})
+
+    monkeypatch.setattr("motion2robot.retarget.executable.auto_legs", lambda *a: ["stance", "steps"])
+    motion, report = plan(_human(), op3, "human", "auto", 2.5, solve)
+    assert [a["legs"] for a in motion.meta["attempts"]] == ["stance", "steps"]
+    assert motion.meta["fallback"]["mode"] == "stance" and motion.meta["executable"] is False

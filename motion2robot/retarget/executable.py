@@ -22,8 +22,8 @@ attempt that passes, in this order:
 
 Nothing is silent: the result's meta says the tempo factor (``tempo``, 1.0 = as generated), why
 (``tempo_reason``), the alternative taken (``fallback``: None, or {"mode", "why"}) and whether the
-chosen attempt passed (``executable``). When no attempt passes, the last one tried (at the cap)
-is returned with ``executable`` False and the reason.
+chosen attempt passed (``executable``). When no attempt passes, the one failing the fewest checks
+(the last tried on a tie) is returned with ``executable`` False and the reason.
 """
 
 from __future__ import annotations
@@ -213,7 +213,9 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         if ok is not None:
             chosen = ok
             break
-    final = chosen or tried[-1]
+    # nothing passes: the attempt failing the fewest checks (the later one on a tie: slower, and
+    # the stance after the steps, as a user would rather have it)
+    final = chosen or min(reversed(tried), key=lambda a: len(a.failed()))
     meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
                   "executable": None if final.report is None else final.feasible,
                   "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
