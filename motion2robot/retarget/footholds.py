@@ -5,7 +5,9 @@ A human stride scaled to a small robot is still too long for it (op3: the Bandai
 the robot's hips. :func:`shorten_steps` re-lays the placements step by step: each step keeps the
 human's turn and sideways offset, its fore-aft length shrinks by the clip's :func:`step_factor`,
 and a foot set beside the other stays :func:`stance_width` to its side. Every placement keeps its
-yaw. Units: metres, radians; world frame z up.
+yaw. :func:`grounded` gives every lift-off a double support before it (the human's flight phases
+and heel-up frames leave none); :func:`filled` gives a foot in the air at either end of the clip
+its nearest placement. Units: metres, radians, seconds; world frame z up.
 """
 
 from __future__ import annotations
@@ -13,15 +15,15 @@ from __future__ import annotations
 import numpy as np
 
 from motion2robot.errors import SolverError
+from motion2robot.retarget.contact_plan import ContactPlan
+from motion2robot.retarget.contacts import phases
+from motion2robot.robot.chains import hip_hinges
+from motion2robot.robot.robot import Robot
 
 
 class PatternError(SolverError):
     """The clip gives no walking pattern (a foot never stands on the floor): ``steps`` cannot be
     tried on it (``auto`` goes on to the next alternative; ``--legs steps`` reports it)."""
-from motion2robot.retarget.contact_plan import ContactPlan
-from motion2robot.retarget.contacts import phases
-from motion2robot.robot.chains import foot_ancestor_mask
-from motion2robot.robot.robot import Robot
 
 
 def _sole_yaw(corners: np.ndarray) -> float:
@@ -119,9 +121,7 @@ def stance_width(robot: Robot) -> float:
     distance between the first hinges of the two legs at the nominal posture), or the soles' width
     and a centimetre if that is more (the soles must not meet)."""
     d = robot.new_data()
-    mask = foot_ancestor_mask(robot)
-    first = [int(np.flatnonzero(mask[:, f])[0]) for f in range(2)]
-    hips = [d.xanchor[robot.joint_ids[j]] for j in first]
+    hips = [d.xanchor[robot.joint_ids[j]] for j in hip_hinges(robot)]
     soles = 2.0 * max(f.sole_half[1] for f in robot.config.feet) + 0.01
     return float(max(np.linalg.norm(hips[0][:2] - hips[1][:2]), soles))
 

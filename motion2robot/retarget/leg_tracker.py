@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 
 from motion2robot.retarget.smoothing import low_pass
-from motion2robot.robot.chains import foot_ancestor_mask
+from motion2robot.robot.chains import foot_ancestor_mask, hip_hinges
 from motion2robot.robot.robot import Robot
 
 #: Hz, cutoff of the root height (its per-step dips go).
@@ -82,8 +82,7 @@ class LegTracker:
         self.qadr = robot.model.jnt_qposadr[np.asarray(robot.joint_ids)[self.legs]]
         self.dadr = robot.model.jnt_dofadr[np.asarray(robot.joint_ids)[self.legs]]
         self.cols = np.concatenate([np.arange(6), self.dadr])
-        mask = foot_ancestor_mask(robot)
-        self.first = [int(np.flatnonzero(mask[:, f])[0]) for f in range(2)]  # each leg's hip hinge
+        self.first = hip_hinges(robot)
         self.lo, self.hi = robot.lower[self.legs], robot.upper[self.legs]
         self.jacp, self.jacr = np.zeros((3, robot.model.nv)), np.zeros((3, robot.model.nv))
         self.turn = np.zeros(3)

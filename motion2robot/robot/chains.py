@@ -26,3 +26,10 @@ def foot_ancestor_mask(robot: Robot) -> np.ndarray:
 def free_limbs(robot: Robot) -> np.ndarray:
     """(n,) bool hinges on no path from the root to a foot (arms, head, waist above the legs)."""
     return ~foot_ancestor_mask(robot).any(axis=1)
+
+
+def hip_hinges(robot: Robot) -> list[int]:
+    """[left, right] index (in ``robot.joint_names``) of each leg's first hinge from the root: the
+    hip, whose anchor is where the leg hangs from."""
+    mask = foot_ancestor_mask(robot)
+    return [int(np.flatnonzero(mask[:, f])[0]) for f in range(mask.shape[1])]
