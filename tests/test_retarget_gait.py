@@ -11,7 +11,6 @@ from motion2robot.motion import read_motion
 from motion2robot.motion.ops import trim
 from motion2robot.retarget import RetargetOptions, retarget
 from motion2robot.retarget.footholds import grounded, shorten_steps, stance_width, step_factor
-from motion2robot.retarget.gait import quat_from_yaw_pitch_roll, yaw_pitch_roll
 from motion2robot.retarget.leg_tracker import LegTracker, _envelope_below
 from motion2robot.robot import load_robot
 from motion2robot.robot.chains import foot_ancestor_mask
@@ -119,14 +118,6 @@ def test_envelope_stays_below_its_bound_and_is_smooth():
     assert (out <= bound + 1e-4).all()
     acc = np.abs(np.diff(out, 2)) * 30.0 ** 2
     assert acc.max() < 0.5   # m/s^2: the sharp dips become gentle
-
-
-def test_euler_round_trip():
-    rng = np.random.default_rng(3)
-    a = np.stack([rng.uniform(-3, 3, 50), rng.uniform(-1.2, 1.2, 50), rng.uniform(-3, 3, 50)], axis=1)
-    back = yaw_pitch_roll(quat_from_yaw_pitch_roll(a))
-    back[:, 0] = np.angle(np.exp(1j * back[:, 0]))
-    np.testing.assert_allclose(np.angle(np.exp(1j * (back - a))), 0.0, atol=1e-9)
 
 
 def test_leg_tracker_reaches_the_robot_s_own_feet_and_com(op3):

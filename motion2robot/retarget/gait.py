@@ -112,24 +112,6 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
                               "solver": {**motion.meta["solver"], "steps": figures}})
 
 
-def yaw_pitch_roll(q: np.ndarray) -> np.ndarray:
-    """(T, 3) z-y-x Euler angles (rad; yaw unwrapped) of (T, 4) wxyz quaternions."""
-    w, x, y, z = q.T
-    yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
-    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    return np.stack([yaw, pitch, roll], axis=1)
-
-
-def quat_from_yaw_pitch_roll(a: np.ndarray) -> np.ndarray:
-    """(T, 4) wxyz quaternions of (T, 3) z-y-x Euler angles (rad)."""
-    cy, sy = np.cos(a[:, 0] / 2), np.sin(a[:, 0] / 2)
-    cp, sp = np.cos(a[:, 1] / 2), np.sin(a[:, 1] / 2)
-    cr, sr = np.cos(a[:, 2] / 2), np.sin(a[:, 2] / 2)
-    return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], axis=1)
-
-
 def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
     """(T,) yaw (rad, unwrapped) between the two soles' headings (``corners`` (T, 2, 4, 3): front
     corners first), low-passed at ROOT_CUTOFF_HZ: the upright pelvis of a walking pattern faces
@@ -148,7 +130,8 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.nda
     corners, contact = filled(plan, setup.where)
     planes, support = support_planes(np.where(contact[:, :, None, None], corners, np.nan), contact, plan.margin)
     out = Q.copy()
-    out[:, 3:7] = quat_from_yaw_pitch_roll(np.stack([feet_heading(corners, fps), np.zeros(len(Q)), np.zeros(len(Q))], axis=1))
+    yaw = feet_heading(corners, fps)  # upright: a turn about z alone (wxyz)
+    out[:, 3:7] = np.stack([np.cos(yaw / 2), np.zeros_like(yaw), np.zeros_like(yaw), np.sin(yaw / 2)], axis=1)
     out[:, 2] = low_pass(Q[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
     upper = np.flatnonzero(~foot_ancestor_mask(robot).any(axis=1))
     if len(upper):
