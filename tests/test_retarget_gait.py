@@ -175,3 +175,18 @@ def test_cli_legs_steps(tmp_path, capsys):
     text = capsys.readouterr().out
     assert out.exists() and code in (0, 1)
     assert "steps" in text
+
+
+def test_swings_move_only_above_the_checks_swing_clearance(op3):
+    """The swing shape of ``steps``: the foot is still (horizontally) until it is above the check's
+    skimming clearance and again from where it comes back down to it, and it moves over more than
+    the middle half of the swing (a shorter horizontal window peaks higher in the legs)."""
+    from motion2robot.retarget.footsteps import APEX_RATIO, lift
+    from motion2robot.retarget.gait import SWING_SHAPE
+    from motion2robot.validate.options import SWING_CLEARANCE_RATIO
+
+    lead, ramp = SWING_SHAPE
+    clearance = SWING_CLEARANCE_RATIO / APEX_RATIO  # as a fraction of the apex
+    assert lift(np.array([lead]), ramp)[0] > 1.2 * clearance
+    assert lift(np.array([1.0 - lead]), ramp)[0] > 1.2 * clearance
+    assert 1.0 - 2.0 * lead > 0.5
