@@ -190,3 +190,32 @@ def test_swings_move_only_above_the_checks_swing_clearance(op3):
     assert lift(np.array([lead]), ramp)[0] > 1.2 * clearance
     assert lift(np.array([1.0 - lead]), ramp)[0] > 1.2 * clearance
     assert 1.0 - 2.0 * lead > 0.5
+
+
+@pytest.mark.slow
+@requires_shared
+def test_g1_walks_a_real_walk_with_its_feet_on_the_plan(monkeypatch):
+    """On the G1 (menagerie) the pattern's targets are reached in every frame of a real walk: the
+    upper body comes from the free solve, whose arms and waist move at human rates (the pinned
+    solve's jerked at up to 2,400 rad/s^2 and the CoM plan following them lost the feet), and the
+    result passes the kinematic checks of the feet and joints."""
+    from tests._shared import MENAGERIE
+
+    if MENAGERIE is None:
+        pytest.skip("no menagerie root")
+    monkeypatch.setenv("MENAGERIE_ROOT", str(MENAGERIE))
+    load_robot.cache_clear()
+    try:
+        g1 = load_robot("menagerie:unitree_g1")
+        human = read_motion(MOTIONS / "bvh" / "bandai_walk_normal_001.bvh")[0]
+        motion = retarget(human, g1, RetargetOptions(legs="steps", tempo="1"))
+    finally:
+        load_robot.cache_clear()
+    walk = motion.meta["solver"]["steps"]
+    assert walk["tracking_error_m"] < 1e-3
+    assert walk["path_m"] > 1.0
+    upper = np.flatnonzero(~foot_ancestor_mask(g1).any(axis=1))
+    acc = np.abs(np.diff(motion.qpos[:, 7 + upper], 2, axis=0)).max() * motion.fps ** 2
+    assert acc < 400.0, acc
+    c = check(motion, g1, CheckOptions(physics=False)).checks
+    assert c["joint_limits"]["ok"] and c["velocity_limits"]["ok"] and c["ground"]["ok"], c["ground"]

@@ -8,8 +8,8 @@ it turns, the torso's heading, the arms and head) and regenerates the legs as a 
 smooth by construction (after Nakaoka et al., IJRR 2007: leg motion regenerated for the robot,
 then a ZMP-based waist trajectory):
 
-1. the whole-body pipeline's first stages: the free solve (where the human's feet go) and the
-   pinned solve (the upper body tracking the human);
+1. the whole-body pipeline's first stages: the free solve (where the human's feet go, and the
+   upper body tracking the human) and the pinned solve (the pelvis height with the feet down);
 2. footholds (:mod:`~.footholds`): a double support before every lift-off (runs and jumps are
    walked; a human walk's heel-up frames leave none), the human's placements re-laid step by step, each step
    shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
@@ -17,7 +17,10 @@ then a ZMP-based waist trajectory):
    (:mod:`~.footsteps`); a foot in the air at either end of the clip stands at its nearest placement;
 3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the pinned
    solve's low-passed and kept below what the legs reach (:func:`~.leg_tracker.root_height`);
-   the hinges of the upper body and head: the pinned solve's, smoothed within the servos' limits;
+   the hinges of the upper body and head: the free solve's, smoothed within the servos' limits
+   (the pinned solve's upper body also answers for the human's full stride and static balance,
+   which the pattern does not keep: on the G1 its arms and waist jerked at 400-2,400 rad/s^2
+   where the free solve's move at 20-300, and the CoM plan following them lost the feet);
 4. a CoM path between the feet whose cart-table ZMP stays inside every frame's shrunk support
    polygon (one QP over the clip: :func:`~.zmp_plan.cart_table_shift`);
 5. per frame, the root and the leg hinges (:class:`~.leg_tracker.LegTracker`) with every sole
@@ -90,6 +93,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     setup = replace(setup, labels=grounded(setup.labels, setup.fps, OVERLAP_S, MIN_SWING_S))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
+    upper_body = Q.copy()
     free_corners = setup.points(Q)[1]
     Q, pinned = pinned_solve(setup, plan_contacts(setup, free_corners), Q)
     longest = STEP_REACH * float(LegTracker(robot).straight_reach().min())
@@ -98,7 +102,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
                          place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN),
                          swing_shape=SWING_SHAPE)
-    Q, walked, figures = walk_pattern(setup, plan, Q)
+    Q, walked, figures = walk_pattern(setup, plan, Q, upper_body)
     pts = setup.points(Q)
     solve_s = time.perf_counter() - t_solve
     path = np.linalg.norm(np.diff(Q[:, :2], axis=0), axis=1).sum()
@@ -125,9 +129,11 @@ def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
     return low_pass(((yaw[:, 0] + right) / 2)[:, None], fps, ROOT_CUTOFF_HZ)[:, 0]
 
 
-def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.ndarray, ContactPlan, dict]:
-    """Stages 3-6 of the module text on the pinned solve ``Q`` and the re-laid contact ``plan``:
-    the trajectory, the plan it stands on (every foot planned in every frame) and figures."""
+def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray,
+                 upper_body: np.ndarray) -> tuple[np.ndarray, ContactPlan, dict]:
+    """Stages 3-6 of the module text on the pinned solve ``Q``, the free solve ``upper_body``
+    (whose upper-body and head hinges are kept) and the re-laid contact ``plan``: the trajectory,
+    the plan it stands on (every foot planned in every frame) and figures."""
     robot, fps = setup.robot, setup.fps
     tracker = LegTracker(robot)
     corners, contact = filled(plan, setup.where)
@@ -138,10 +144,10 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.nda
     out[:, 2] = low_pass(Q[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
     upper = np.flatnonzero(~foot_ancestor_mask(robot).any(axis=1))
     if len(upper):
-        # the pinned solve's per-frame noise filtered as the whole-body pipeline's last stage does
+        # the solve's per-frame noise filtered as the whole-body pipeline's last stage does
         # (the same cutoff in Hz at any rate), then rounded off to what the servos can follow
         lo, hi = robot.lower[upper], robot.upper[upper]
-        out[:, 7 + upper] = smooth_hinges(low_pass(Q[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
+        out[:, 7 + upper] = smooth_hinges(low_pass(upper_body[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
                                           setup.servo[1][upper], fps, robot.velocity_limit[upper], lo, hi)
     # the CoM plan: near the feet's midpoint, its cart-table ZMP inside every frame's support polygon
     com_pinned = setup.points(Q)[2]
