@@ -103,10 +103,15 @@ class LegTracker:
         self._lo_zone, self._hi_zone = self.lo + LIMIT_ZONE, self.hi - LIMIT_ZONE
         self._zones_apart = bool((self._lo_zone <= self._hi_zone).all())
         self._w_hard = np.r_[np.full(24, HARD_WEIGHT), np.full(2, HARD_WEIGHT * COM_WEIGHT)]
-        # each row's weight (the limit rows are weighted as they are computed; temporal: per solve)
-        self._w_rows = np.r_[self._w_hard, ROOT_HEIGHT_WEIGHT, np.full(3, ROOT_TURN_WEIGHT), np.ones(n + nc)]
-        # views of MjData's arrays (they live as long as it does)
-        self._qpos, self._com = d.qpos, d.subtree_com[robot.root_body, :2]
+        self._w_hard_col = self._w_hard[:, None]
+        # each row's weight (a limit row is computed as over x its derivative: 0.5; temporal: per solve)
+        self._w_rows = np.r_[self._w_hard, ROOT_HEIGHT_WEIGHT, np.full(3, ROOT_TURN_WEIGHT), np.full(n, 0.5), np.ones(nc)]
+        self._w_first = self._w_rows[:HARD_ROWS + 4 + n]
+        # views of MjData's arrays (they live as long as it does) and of the step's parts
+        self._qpos, self._sxp, self._com = d.qpos, d.site_xpos, d.subtree_com[robot.root_body, :2]
+        self._qpos_pos, self._qpos_quat = d.qpos[:3], d.qpos[3:7]
+        self._qpos_legs = d.qpos[self._legq] if isinstance(self._legq, slice) else None
+        self._at_lo, self._at_hi = self.lo + 1e-9, self.hi - 1e-9
         # the Jacobian over the unknowns: hard rows from the sites' and the CoM's whole-nv rows
         self._jac = np.zeros((HARD_ROWS + 1, robot.model.nv))
         self._jac_hard = self._jac[:HARD_ROWS]
@@ -114,9 +119,12 @@ class LegTracker:
         self._com_jac = self._jac[24:27]
         self._J = J = np.zeros((self.n_rows, nc))
         self._J_hard, self._J_limit = J[:HARD_ROWS], J.reshape(-1)[30 * nc + 6::nc + 1][:n]
+        self._J_rows = {rows: J[:rows] for rows in (self.n_rows, self.n_rows - nc)}
         self._H, self._L, self._g, self._dx = np.zeros((nc, nc)), np.zeros((nc, nc)), np.zeros(nc), np.zeros(nc)
+        self._dx_pos, self._dx_rot, self._dx_legs, self._dx_abs = self._dx[:3], self._dx[3:6], self._dx[6:], np.zeros(nc)
         self._L_diag = self._L.reshape(-1)[::nc + 1]
         self._held = np.zeros(nc, dtype=bool)
+        self._r_abs = np.zeros(HARD_ROWS)
         self._over, self._t1, self._t2, self._leg = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
         k = 30 + n  # per residual buffer: (all, first frame's, corners (8, 3), CoM, hard, turn, limits,
         #           temporal: pos, turn, legs)
@@ -134,7 +142,7 @@ class LegTracker:
         mujoco.mj_kinematics(m, d)
         mujoco.mj_comPos(m, d)
         r_all, r_first, r_corners, r_com, r_hard, r_turn, r_limit, r_pos, r_rot, r_legs = r
-        np.subtract(d.site_xpos[self.sites], corners, r_corners)
+        np.subtract(self._sxp[self.sites], corners, r_corners)
         np.subtract(self._com, com_xy, r_com)
         # soft: the root near its planned height and orientation
         r_all[26] = qpos[2] - plan_z
@@ -151,15 +159,12 @@ class LegTracker:
             np.maximum(np.subtract(q, self._hi_zone, t1), 0.0, out=t1)
             np.maximum(np.subtract(self._lo_zone, q, t2), 0.0, out=t2)
             np.subtract(t1, t2, over)
-        if np.count_nonzero(over):
-            np.abs(over, t1)
-            np.divide(np.multiply(np.multiply(over, t1, t2), LIMIT_WEIGHT, t2), LIMIT_ZONE, r_limit)
-            np.divide(np.multiply(t1, 2.0 * LIMIT_WEIGHT, t1), LIMIT_ZONE, self._J_limit)
-        else:
-            r_limit.fill(0.0)
-            self._J_limit.fill(0.0)
+        # the row LIMIT_WEIGHT sign(over) over^2 / LIMIT_ZONE is 0.5 over x its derivative (the
+        # 0.5 is the row's weight)
+        np.multiply(np.abs(over, t1), 2.0 * LIMIT_WEIGHT / LIMIT_ZONE, self._J_limit)
+        np.multiply(over, self._J_limit, r_limit)
         if prev is None:
-            np.multiply(r_first, self._w_rows[:len(r_first)], r_first)
+            np.multiply(r_first, self._w_first, r_first)
             return float(r_first @ r_first)
         # the previous frame's solution: the continuous branch, no jumps
         np.subtract(qpos[:3], prev[0], r_pos)
@@ -168,8 +173,8 @@ class LegTracker:
         np.multiply(r_all, self._w_rows, r_all)
         return float(r_all @ r_all)
 
-    def _normal(self, r: np.ndarray, rows: int) -> None:
-        """The Gauss-Newton normal equations of the first ``rows`` rows ``r`` at the posture in
+    def _normal(self, r: np.ndarray) -> None:
+        """The Gauss-Newton normal equations of the rows ``r`` (all, or a first frame's) at the posture in
         ``self.data`` (its kinematics and the limit rows' derivatives done by the evaluation of
         ``r``): ``self._H`` = J^T J, ``self._g`` = -J^T r."""
         m, d = self.model, self.data
@@ -177,10 +182,11 @@ class LegTracker:
             mujoco.mj_jacSite(m, d, jac, None, site)
         mujoco.mj_jacSubtreeCom(m, d, self._com_jac, self.robot.root_body)
         self._jac_hard.take(self.cols, 1, self._J_hard)
-        np.multiply(self._J_hard, self._w_hard[:, None], out=self._J_hard)
-        A = self._J[:rows]
-        np.matmul(A.T, A, out=self._H)
-        np.negative(np.matmul(A.T, r[:rows], out=self._g), out=self._g)
+        np.multiply(self._J_hard, self._w_hard_col, self._J_hard)
+        A = self._J_rows[len(r)]
+        mujoco.mju_mulMatTMat(self._H, A, A)
+        mujoco.mju_mulMatTVec(self._g, A, r)
+        np.negative(self._g, self._g)
 
     def _direction(self, at_lo: np.ndarray | None, at_hi: np.ndarray, mu: float) -> tuple[np.ndarray, float]:
         """The damped Gauss-Newton step from ``self._H``, ``self._g``, and its largest entry's
@@ -209,21 +215,27 @@ class LegTracker:
                 L[held, held] = 1.0
                 mujoco.mju_cholFactor(L, 0.0)
                 mujoco.mju_cholSolve(dx, L, np.where(held, 0.0, g))
-        big = max(float(dx.max()), -float(dx.min()))
+        big = float(np.maximum.reduce(np.abs(dx, self._dx_abs)))
         if big > MAX_STEP:
             dx *= MAX_STEP / big
             big = MAX_STEP
         return dx, big
 
-    def _step(self, q: np.ndarray, dx: np.ndarray) -> None:
-        """``self.data.qpos`` = ``q`` moved by ``dx`` (the root's velocity and the leg hinges'),
-        the hinges kept within their limits."""
-        qpos, leg = self._qpos, self._leg
-        np.add(q[:3], dx[:3], out=qpos[:3])
-        qpos[3:7] = q[3:7]
-        mujoco.mju_quatIntegrate(qpos[3:7], dx[3:6], 1.0)
-        np.add(q[self._legq], dx[6:], out=leg)
-        qpos[self._legq] = np.minimum(np.maximum(leg, self.lo, out=leg), self.hi, out=leg)
+    def _step(self, q: np.ndarray) -> None:
+        """``self.data.qpos`` = ``q`` moved by the step ``self._dx`` (the root's velocity and
+        the leg hinges'), the hinges kept within their limits."""
+        np.copyto(self._qpos, q)
+        np.add(self._qpos_pos, self._dx_pos, self._qpos_pos)
+        mujoco.mju_quatIntegrate(self._qpos_quat, self._dx_rot, 1.0)
+        legs = self._qpos_legs
+        if legs is None:  # scattered leg hinges
+            legs = self._leg
+            np.add(q[self._legq], self._dx_legs, legs)
+        else:
+            np.add(legs, self._dx_legs, legs)
+        np.minimum(np.maximum(legs, self.lo, out=legs), self.hi, out=legs)
+        if self._qpos_legs is None:
+            self._qpos[self._legq] = legs
 
     def solve(self, Q: np.ndarray, corners: np.ndarray, com_xy: np.ndarray, fps: float,
               start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -244,28 +256,31 @@ class LegTracker:
         J[27:30, 3:6] = ROOT_TURN_WEIGHT * np.eye(3)
         J[self.n_rows - nc:] = w_prev * np.eye(nc)
         self._w_rows[self.n_rows - nc:] = w_prev
+        lo_buf, hi_buf = np.zeros(len(self.legs), dtype=bool), np.zeros(len(self.legs), dtype=bool)
         for t in range(len(Q)):
             q = Q[t].copy()
-            prev = (out[t - 1, :3], out[t - 1, 3:7], out[t - 1, legq]) if t else None
+            p = out[t - 1]
+            prev = (p[:3], p[3:7], p[legq]) if t else None
             if start is not None:
-                q[:7], q[legq] = start[t, :7], start[t, legq]
+                s = start[t]
+                q[:7], q[legq] = s[:7], s[legq]
             elif t:  # the previous frame's root xy and legs
-                q[:2], q[legq] = out[t - 1, :2], out[t - 1, legq]
-            rows = self.n_rows if t else self.n_rows - nc
+                q[:2], q[legq] = p[:2], prev[2]
+            rows = 0 if t else 1  # which view of a residual buffer the normal equations take
             frame = (targets[t], com_xy[t], float(Q[t, 2]), Q[t, 3:7], prev, w_prev)
             r, r_new = self._r
-            qpos[:] = q
+            np.copyto(qpos, q)
             cost, mu, fresh = self._residual(r, *frame), DAMPING, False
             for _ in range(IK_ITERATIONS):
                 if not fresh:  # the normal equations at the current solution (kinematics in data)
-                    self._normal(r[0], rows)
+                    self._normal(r[rows])
                     ql = q[legq]
-                    at_lo, at_hi = ql <= self.lo + 1e-9, ql >= self.hi - 1e-9
+                    at_lo, at_hi = np.less_equal(ql, self._at_lo, lo_buf), np.greater_equal(ql, self._at_hi, hi_buf)
                     if not (np.count_nonzero(at_lo) or np.count_nonzero(at_hi)):
                         at_lo = None
                     fresh = True
                 dx, big = self._direction(at_lo, at_hi, mu)
-                self._step(q, dx)
+                self._step(q)
                 c_new = self._residual(r_new, *frame)
                 if c_new < cost:  # keep a step that lowers the cost
                     done = big < STEP_TOLERANCE or cost - c_new < 1e-12 * HARD_WEIGHT ** 2
@@ -275,7 +290,7 @@ class LegTracker:
                         break
                 else:
                     mu *= 100.0
-            err[t] = float(np.abs(r[4]).max()) / HARD_WEIGHT
+            err[t] = float(np.maximum.reduce(np.abs(r[4], self._r_abs))) / HARD_WEIGHT
             out[t] = q
             if err[t] > LOST:  # the pattern is out of the legs' reach: the rest is not worth solving
                 err[t:] = err[t]
