@@ -18,7 +18,8 @@ and runs the full ``check`` with the physics playback. Prints per clip and in to
   over 1.5x gets the ratio split in two: sampling (the natural cubic spline through the native
   frames, its peak over their second difference's: what the native rate does not show of its own
   trajectory) and trajectory (the 100 fps result's peak over that spline's: how much the two
-  results differ); and the clips with a violation confined to their first or last 2 frames.
+  results differ); native peaks below ROOT_FLOOR / JOINT_FLOOR count as those (negligible motion);
+  and the clips with a violation confined to their first or last 2 frames.
 
 Run:  python scripts/bench_executable.py [--robot op3] [--limit N] [--tempo auto] [--csv out.csv]
 """
@@ -70,6 +71,12 @@ def peak_accelerations(motion) -> tuple[float, float]:
     """(root m/s^2, joint rad/s^2) peak second differences."""
     acc = np.diff(motion.qpos, 2, axis=0) * motion.fps ** 2
     return float(np.abs(acc[:, :3]).max()), float(np.abs(acc[:, 7:]).max())
+
+
+#: m/s^2 and rad/s^2: native peaks below these count as these in the 100 fps ratio (a motion that
+#: stands still natively would otherwise divide by ~0; a servo's own limit is ~100 rad/s^2).
+ROOT_FLOOR = 0.5
+JOINT_FLOOR = 5.0
 
 
 def spline_accelerations(motion) -> tuple[float, float]:
@@ -157,9 +164,11 @@ def main() -> int:
             fine_opts = RetargetOptions(fps=100.0, tempo=row["tempo"], legs=(row["fallback"] or {}).get("mode", "whole"))
             fine = retarget(human, robot, fine_opts)
             (rn, jn), (rf, jf) = peak_accelerations(motion), peak_accelerations(fine)
+            rn, jn = max(rn, ROOT_FLOOR), max(jn, JOINT_FLOOR)  # a ratio of negligible peaks is no spike
             row["fine_ratio"] = max(rf / max(rn, 1e-9), jf / max(jn, 1e-9))
             row["fine"] = f"root {rf / max(rn, 1e-9):.2f}x ({rn:.1f} -> {rf:.1f} m/s^2), joints {jf / max(jn, 1e-9):.2f}x ({jn:.0f} -> {jf:.0f} rad/s^2)"
             rs, js = spline_accelerations(motion)
+            rs, js = max(rs, ROOT_FLOOR), max(js, JOINT_FLOOR)
             # the ratio of the failing quantity split in two: what the native frames imply between them
             # (sampling: their spline's peak over their second difference's) and how much the 100 fps
             # result itself differs from that spline (trajectory)
