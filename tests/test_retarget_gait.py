@@ -10,7 +10,7 @@ from motion2robot.cli import main
 from motion2robot.motion import read_motion
 from motion2robot.motion.ops import trim
 from motion2robot.retarget import RetargetOptions, retarget
-from motion2robot.retarget.footholds import grounded, shorten_steps, stance_width, step_factor
+from motion2robot.retarget.footholds import grounded, shorten_steps, stance_width, step_factor, widen_swings
 from motion2robot.retarget.leg_tracker import LegTracker, _envelope_below
 from motion2robot.robot import load_robot
 from motion2robot.robot.chains import foot_ancestor_mask
@@ -219,3 +219,28 @@ def test_g1_walks_a_real_walk_with_its_feet_on_the_plan(monkeypatch):
     assert acc < 400.0, acc
     c = check(motion, g1, CheckOptions(physics=False)).checks
     assert c["joint_limits"]["ok"] and c["velocity_limits"]["ok"] and c["ground"]["ok"], c["ground"]
+
+
+
+def _row(labels, f):
+    return "".join(str(int(x)) for x in labels[:, f])
+
+
+def test_short_swings_are_widened_into_the_double_supports_around_them():
+    """A 2-frame swing becomes 6 frames, 2 taken from each side where the other foot is down; a
+    swing next to the other foot's swing (no double support to take) keeps what it can get; a
+    foot in the air at the clip's ends is not a swing; long swings are untouched."""
+    left = "11111" "00" "11111" "111111" "111"
+    right = "11111" "11" "11111" "000000" "111"
+    labels = np.array([[a == "1", b == "1"] for a, b in zip(left, right)])
+    out = widen_swings(labels, 6)
+    assert _row(out, 0) == "111" "000000" "111111111111"
+    assert _row(out, 1) == right  # its swing already lasts 6 frames
+    # the other foot lifts right after: only the frames before can join the swing
+    left2 = "11111" "00" "1" "111111"
+    right2 = "11111" "11" "0" "000011"
+    tight = np.array([[a == "1", b == "1"] for a, b in zip(left2, right2)])
+    got = _row(widen_swings(tight, 6), 0)
+    assert got == "1" "000000" "1111111"  # all four frames from before the swing
+    edges = np.array([[False, True]] * 3 + [[True, True]] * 5 + [[False, True]] * 2)
+    np.testing.assert_array_equal(widen_swings(edges, 6), edges)

@@ -126,6 +126,33 @@ def stance_width(robot: Robot) -> float:
     return float(max(np.linalg.norm(hips[0][:2] - hips[1][:2]), soles))
 
 
+def widen_swings(labels: np.ndarray, min_frames: int) -> np.ndarray:
+    """(T, 2) contact labels in which every swing (a foot in the air between two of its contact
+    phases) lasts at least ``min_frames``: a shorter one lifts off earlier and sets down later by
+    about the same number of frames, taken from the foot's own contact phases where the other
+    foot is down (it carries the body meanwhile) and leaving each phase at least one frame; a
+    swing with no room keeps what it can get."""
+    out = labels.copy()
+    T = len(out)
+    for f in range(out.shape[1]):
+        other = out[:, 1 - f]
+        for g, a, b in sorted(phases(~out[:, f:f + 1]), key=lambda r: r[1]):
+            if a == 0 or b >= T or b - a >= min_frames:
+                continue
+            before = 0  # frames of this foot's phase before the swing that can join it
+            while a - before - 2 >= 0 and out[a - before - 2, f] and other[a - before - 1]:
+                before += 1
+            after = 0
+            while b + after + 1 < T and out[b + after + 1, f] and other[b + after]:
+                after += 1
+            need = min_frames - (b - a)
+            late = min(after, need - min(before, need // 2))
+            early = min(before, need - late)
+            out[a - early:a, f] = False
+            out[b:b + late, f] = False
+    return out
+
+
 def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float) -> np.ndarray:
     """(T, 2) contact labels in which a foot lifts off only after the other has been down for
     ``overlap_s``: a phase whose foot would lift with the other foot in the air (a run's flight, a

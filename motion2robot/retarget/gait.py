@@ -45,7 +45,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.constraints import support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
 from motion2robot.retarget.contacts import anchor_soles
-from motion2robot.retarget.footholds import filled, grounded, shorten_steps, stance_width, step_factor
+from motion2robot.retarget.footholds import filled, grounded, shorten_steps, stance_width, step_factor, widen_swings
 from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
@@ -70,6 +70,10 @@ MAX_TURN = 0.35
 #: none), and the least swing that is left (:func:`~.footholds.grounded`).
 OVERLAP_S = 0.2
 MIN_SWING_S = 0.2
+#: The least swing in frames of the clip's own rate (a 20 fps clip: 0.4 s): a swing sampled by
+#: fewer frames is a polygon of a few points to the servos, whose peaks a finer rate shows
+#: (:func:`~.footholds.widen_swings` lengthens it into the double supports around it).
+MIN_SWING_FRAMES = 8
 #: (lead, ramp) of the swings (:func:`~.footsteps.swing_path`): the foot rises over the first half
 #: and sets down over the second (the whole-body plan's 0.3 lifts within 0.12 s of a 0.4 s swing,
 #: a peak a 20 fps clip cannot show but a 100 fps one does), moving horizontally from a fifth in,
@@ -90,7 +94,11 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     opt = replace(options, dynamic_balance=False)
     t_all = time.perf_counter()
     setup = prepare(human, robot, opt)
-    setup = replace(setup, labels=grounded(setup.labels, setup.fps, OVERLAP_S, MIN_SWING_S))
+    # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
+    native = float(human.meta.get("resampled_from_fps") or human.fps)
+    min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
+    labels = widen_swings(setup.labels, int(np.ceil(min_swing * setup.fps - 1e-9)))
+    setup = replace(setup, labels=grounded(labels, setup.fps, OVERLAP_S, min_swing))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
     upper_body = Q.copy()
