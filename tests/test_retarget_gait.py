@@ -86,6 +86,29 @@ def test_turns_are_kept_within_what_the_hips_can_twist():
     assert yaw(*laid[-1]) > 0.6  # the heading is caught up over the steps
 
 
+def test_a_foot_turns_no_faster_than_its_swing_allows():
+    """The same turning walk with a turn rate: each foot's own yaw changes from its last placement
+    by at most the rate times its swing's frames (5 here), and the heading still comes round."""
+    soles, labels = _walk(n=12, yaws=[0.8, 0.8] + [1.6] * 10)
+    rate = 0.04  # rad per frame: 0.2 rad per 5-frame swing
+    out = shorten_steps(soles, labels, 0.5, width=0.09, max_turn=0.35, turn_rate=rate)
+    free = shorten_steps(soles, labels, 0.5, width=0.09, max_turn=0.35)
+
+    def yaw(o, f, a):
+        s = o[a, f]
+        return np.arctan2(*(s[0, :2] + s[1, :2] - s[2, :2] - s[3, :2])[::-1])
+
+    def turns(o):  # (own turn, swing frames) of every step
+        for f in range(2):
+            starts = [a for g, a, _ in _centres(o, labels) if g == f]
+            for a0, a1 in zip(starts, starts[1:]):
+                yield abs(yaw(o, f, a1) - yaw(o, f, a0)), a1 - 1 - np.flatnonzero(labels[:a1, f])[-1]
+
+    assert all(turn <= rate * swing + 1e-9 for turn, swing in turns(out))
+    assert max(turn for turn, _ in turns(free)) > 0.25  # without the rate, steps turn farther
+    assert yaw(out, *[(f, a) for f, a, _ in _centres(out, labels)][-1]) > 1.4  # caught up
+
+
 def test_every_lift_off_waits_for_a_double_support():
     labels = np.zeros((40, 2), bool)
     labels[:10, 0] = True      # left down, then flight 10-15, right lands at 15

@@ -78,7 +78,8 @@ def _turned(sole: np.ndarray, centre: np.ndarray, yaw: float) -> np.ndarray:
     return out
 
 
-def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float, max_turn: float) -> np.ndarray:
+def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float, max_turn: float,
+                  turn_rate: float = np.inf) -> np.ndarray:
     """Placements re-laid step by step (:func:`_steps`), each from the re-laid placement it steps
     from: the step keeps the human's sideways offset and turn in that placement's frame, its
     fore-aft length shrinks by ``k``, a foot set beside the other lands at least ``width`` (m) to
@@ -86,8 +87,9 @@ def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float,
     foot set inside the hip, as a human's narrower placements would ask), and a foot turns at
     most ``max_turn`` (rad) from the one it steps from (the hip yaws' range; the human's heading
     is caught up on the next steps). The feet the clip starts on are turned to within
-    ``max_turn / 2`` of their mean heading. ``soles``: (T, 2, 4, 3) placements in the ``labels``
-    (T, 2) contact frames."""
+    ``max_turn / 2`` of their mean heading; a foot turns from its own last placement by at most
+    ``turn_rate`` (rad per frame of its swing: what its hip yaw can turn it by in the air).
+    ``soles``: (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames."""
     out = soles.copy()
     runs = _steps(labels)
     first = [(f, a, b) for f, a, b, ref in runs if ref is None]
@@ -112,6 +114,11 @@ def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float,
         yaw_ref = _sole_yaw(base)
         fwd, left = _step_axes(out, ref)                       # laid from the re-laid placement
         yaw = yaw_ref + float(np.clip(_wrap(_sole_yaw(soles[a, f]) - yaw_ref), -max_turn, max_turn))
+        own = np.flatnonzero(labels[:a, f])
+        if len(own) and np.isfinite(turn_rate):  # the turn its swing has time for
+            last = _sole_yaw(out[own[-1], f])
+            room = turn_rate * (a - 1 - own[-1])
+            yaw = last + float(np.clip(_wrap(yaw - last), -room, room))
         out[a:b, f] = _turned(soles[a, f], base.mean(axis=0)[:2] + k * fore * fwd + lat * left, yaw)
     return out
 

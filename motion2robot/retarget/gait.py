@@ -66,6 +66,11 @@ COM_CUTOFF_HZ = 1.0
 STEP_REACH = 0.18
 #: rad a foot may turn from the one it steps from (op3's hip yaws reach 0.45 rad either way).
 MAX_TURN = 0.35
+#: Share of the legs' velocity limit a swing foot turns at (about its vertical), over the part of
+#: the swing it moves in (:data:`SWING_SHAPE`): a foot turning 0.7 rad in a 0.2 s swing asked
+#: op3's hip yaw for 6.7 rad/s, 1.4x its servo's, at every tempo (the swing stays 0.2 s; slowing
+#: the clip lengthened the double supports).
+TURN_SPEED = 0.5
 #: s of double support before every lift-off (the human's flight phases and heel-up frames leave
 #: none), and the least swing that is left (:func:`~.footholds.grounded`).
 OVERLAP_S = 0.2
@@ -107,8 +112,10 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     longest = STEP_REACH * float(LegTracker(robot).straight_reach().min())
     k = step_factor(anchor_soles(free_corners, setup.labels), setup.labels, longest)
     width = stance_width(robot)
+    legs = foot_ancestor_mask(robot).any(axis=1)
+    turn_rate = TURN_SPEED * float(robot.velocity_limit[legs].min()) * (1.0 - 2.0 * SWING_SHAPE[0]) / setup.fps
     plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
-                         place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN),
+                         place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN, turn_rate),
                          swing_shape=SWING_SHAPE)
     Q, walked, figures = walk_pattern(setup, plan, Q, upper_body)
     pts = setup.points(Q)
