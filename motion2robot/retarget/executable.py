@@ -4,7 +4,9 @@
 the full :func:`~motion2robot.validate.check` (physics playback included) and picks the first
 attempt that passes, in this order:
 
-1. whole body at the generated tempo (x1.0);
+1. whole body at the generated tempo (x1.0), unless a lift-off of the human's leaves the whole
+   body's static balance too little double support to shift its weight even at the slowest
+   tempo allowed (:mod:`~.weight_shift`: then it is not tried, and the fallback says why);
 2. whole body slowed: first at the cap (if even that fails, no smaller slow-down can pass and the
    steps between are skipped), else the smallest of :data:`~.tempo.AUTO_STEPS` that passes; not
    tried when x1.0 fails a check no tempo changes (:data:`TEMPO_PROOF`: limits, self-collision,
@@ -39,6 +41,7 @@ from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
 from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
+from motion2robot.retarget.weight_shift import short_shifts
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -49,6 +52,8 @@ AUTO_LEGS = ("whole", "steps", "stance")
 #: m (human): a pelvis that goes farther than this from where it starts travels (a walk, not a
 #: motion in place).
 TRAVEL_M = 0.5
+
+_MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
 
 #: Checks a slower tempo cannot make pass (the same postures, only slower): an attempt failing any
 #: of them is not tried slower.
@@ -153,7 +158,8 @@ def auto_legs(human: HumanMotion, labels: np.ndarray, flight: bool) -> list[str]
     return [m for m in ([] if flight else ["whole"]) + order if m != "steps" or steps]
 
 
-def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot) -> dict | None:
+def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
+              skipped: list[dict]) -> dict | None:
     """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
     if final.legs == "whole":
         return None
@@ -164,8 +170,9 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                "cannot produce" + ("; its steps are walked with a foot always on the floor" if final.legs == "steps"
                                    else ""))
     else:
-        why = "; ".join(f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
-                        for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode]) and mode != final.legs)
+        why = "; ".join([f"{_MODE_WORDS[s['legs']]} not tried: {s['skipped']}" for s in skipped if s["legs"] != final.legs]
+                        + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
+                           for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode]) and mode != final.legs])
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -202,6 +209,11 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     chosen = None
     skipped: list[dict] = []
     for mode in modes:
+        if mode == "whole" and legs == "auto":
+            why = short_shifts(human, robot, labels, max(factors))
+            if why is not None:  # no tempo up to the cap gives the static weight shifts time
+                skipped.append({"legs": mode, "skipped": why})
+                continue
         try:
             ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors, ascending=mode == "steps")
         except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
@@ -234,7 +246,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         base = next(a for a in tried if a.legs == final.legs)
         meta["tempo_reason"] = (f"slowed x{final.factor:.2f}, the smallest slow-down tried that passes "
                                 f"(at x{base.factor:.2f} {_words(base.failed())} failed)")
-    meta["fallback"] = _fallback(final, legs, flight, tried, robot)
+    meta["fallback"] = _fallback(final, legs, flight, tried, robot, skipped)
     if (chosen is None and final.report is not None and judging
             and needs_full_check(final.report, check_options)):  # the full report of what is returned
         final = Attempt(final.legs, final.factor, final.motion, _judge_full(robot, check_options)(final.motion))
