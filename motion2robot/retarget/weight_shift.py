@@ -12,7 +12,7 @@ whose human lifts a foot after less double support than ``tau_min``, even slowed
 asks the whole body for a jump of the CoM at that lift-off: every solve and check of it is spent
 for nothing. On the dev clips every clip that lifts a foot at all failed the whole body at x1.0
 and at x2.5 (every clip that does not passed it, or failed the playback only); the screen stops
-33 of them and lets 11 through. A human walk whose heel-up frames leave no double support at all
+28 of them and lets 9 through. A human walk whose heel-up frames leave no double support at all
 asks for the jump at every step.
 
 Units: metres, seconds; labels (T, 2) [left, right]; z up.
