@@ -143,7 +143,7 @@ def widen_swings(labels: np.ndarray, min_frames: int) -> np.ndarray:
     T = len(out)
     for f in range(out.shape[1]):
         other = out[:, 1 - f]
-        for g, a, b in sorted(phases(~out[:, f:f + 1]), key=lambda r: r[1]):
+        for _, a, b in sorted(phases(~out[:, f:f + 1]), key=lambda r: r[1]):
             if a == 0 or b >= T or b - a >= min_frames:
                 continue
             before = 0  # frames of this foot's phase before the swing that can join it
