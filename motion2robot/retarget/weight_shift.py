@@ -26,24 +26,31 @@ import numpy as np
 from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.retarget.contacts import phases, planted
 from motion2robot.retarget.scale import auto_scale, scaled_keypoints
+from motion2robot.retarget.zmp_plan import GRAVITY
 from motion2robot.robot.robot import Robot
 
 #: Peak acceleration of a minimum-jerk move over distance D in time tau is PEAK * D / tau^2.
 PEAK = 5.77
-GRAVITY = 9.81
+
+
+def _geometry(robot: Robot) -> tuple[float, float]:
+    """(CoM height at the nominal posture, sole width), metres; the width from the feet's config."""
+    d = robot.new_data()
+    mujoco.mj_comPos(robot.model, d)
+    width = 2.0 * min(f.sole_half[1] for f in robot.config.feet)
+    return float(d.subtree_com[robot.root_body][2]), float(width)
+
+
+def _shift_time(distance: float, height: float, width: float) -> float:
+    if distance <= 0.0:
+        return 0.0
+    return float(np.sqrt(PEAK * distance * height / (GRAVITY * max(width, 1e-3))))
 
 
 def shift_time(robot: Robot, distance: float) -> float:
     """s: the shortest static weight shift of ``distance`` (m, from between the feet to the stance
     sole's inner edge) on ``robot`` (its nominal CoM height, its sole's width; see the module text)."""
-    if distance <= 0.0:
-        return 0.0
-    d = robot.new_data()
-    mujoco.mj_comPos(robot.model, d)
-    height = float(d.subtree_com[robot.root_body][2])
-    corners = d.site_xpos[np.asarray(robot.sole_sites[0])]
-    width = float(np.ptp(corners[:, 1]))
-    return float(np.sqrt(PEAK * distance * height / (GRAVITY * max(width, 1e-3))))
+    return _shift_time(distance, *_geometry(robot))
 
 
 def short_shifts(human: HumanMotion, robot: Robot, labels: np.ndarray, cap: float) -> str | None:
@@ -54,15 +61,15 @@ def short_shifts(human: HumanMotion, robot: Robot, labels: np.ndarray, cap: floa
     kp = scaled_keypoints(human.positions, auto_scale(human, robot))
     ankles = kp[:, [KP["left_ankle"], KP["right_ankle"]], :2]
     both = feet.all(axis=1)
-    half_sole = 0.5 * float(np.ptp(robot.nominal_site_xpos[np.asarray(robot.sole_sites[0])][:, 1]))
+    height, width = _geometry(robot)
     for f, a, e in sorted(phases(feet), key=lambda r: r[2]):
         if e >= len(feet) or not labels[e - 1, 1 - f]:
             continue  # the clip ends standing, or the other foot is off the floor (flight: not this screen's)
         n = 0
         while n < e and both[e - 1 - n]:
             n += 1
-        distance = 0.5 * float(np.linalg.norm(ankles[e - 1, 0] - ankles[e - 1, 1])) - half_sole
-        need = shift_time(robot, distance)
+        distance = 0.5 * float(np.linalg.norm(ankles[e - 1, 0] - ankles[e - 1, 1]) - width)
+        need = _shift_time(distance, height, width)
         if cap * n / human.fps < need:
             side = ("left", "right")[f]
             return (f"at {e / human.fps:.2f} s the {side} foot lifts after {1000 * n / human.fps:.0f} ms with both "
