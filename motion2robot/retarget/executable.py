@@ -85,18 +85,13 @@ def tempo_proof(motion: RobotMotion) -> frozenset:
     return TEMPO_PROOF - {"ground"} if feet.get("free_swings_too_fast") else TEMPO_PROOF
 
 
-def _judge(robot: Robot, options: object | None) -> Callable[[RobotMotion], object]:
+def _judge(robot: Robot, options: object | None, full: bool = False) -> Callable[[RobotMotion], object]:
+    """``check`` with ``options`` (default: every check); unless ``full``, the physics playback
+    only for a motion that passes the kinematic checks."""
     from motion2robot.validate import CheckOptions, check  # the judge sits above the retargeter
 
     options = options or CheckOptions()
-    return lambda motion: check(motion, robot, options, physics_if_feasible=True)
-
-
-def _judge_full(robot: Robot, options: object | None) -> Callable[[RobotMotion], object]:
-    from motion2robot.validate import CheckOptions, check
-
-    options = options or CheckOptions()
-    return lambda motion: check(motion, robot, options)
+    return lambda motion: check(motion, robot, options, physics_if_feasible=not full)
 
 
 def _factors(tempo: str | float, cap: float, human: HumanMotion, robot: Robot) -> list[float]:
@@ -249,7 +244,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     meta["fallback"] = _fallback(final, legs, flight, tried, robot, skipped)
     if (chosen is None and final.report is not None and judging
             and needs_full_check(final.report, check_options)):  # the full report of what is returned
-        final = Attempt(final.legs, final.factor, final.motion, _judge_full(robot, check_options)(final.motion))
+        final = Attempt(final.legs, final.factor, final.motion, _judge(robot, check_options, full=True)(final.motion))
     if final.report is not None:  # the report speaks of the motion as annotated
         final.report.figures.update(tempo=meta["tempo"], tempo_reason=meta["tempo_reason"], fallback=meta["fallback"])
     return final.motion.with_(meta=meta), final.report
