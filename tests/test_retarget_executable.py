@@ -238,3 +238,11 @@ def test_ascending_search_stops_at_the_first_tempo_that_passes():
     made.clear()
     ok, _ = _search(lambda k: make(k, passes_from=9.0), [1.0, 1.25, 2.5], ascending=True)
     assert ok is None and made == [1.0, 1.25, 2.5]
+    made.clear()
+
+    def worsening(k):  # slower, a check the faster one passed fails too: not the tempo's doing
+        made.append(k)
+        return Attempt("steps", k, Motion(), Report(False, ("torque_limits",) + (("balance",) if k > 1.2 else ())))
+
+    ok, _ = _search(worsening, [1.0, 1.25, 1.6, 2.0, 2.5], ascending=True)
+    assert ok is None and made == [1.0, 1.25]

@@ -111,7 +111,10 @@ def _search(make: Callable[[float], Attempt], factors: list[float],
     """The first passing attempt in ``factors`` order, trying the first, then the last, then the
     ones between (a slower tempo passing is what makes the ones between worth trying); with
     ``ascending``, the first, then each slower one in turn (cheaper where a small slow-down
-    suffices, as for the ``steps`` pattern, whose accelerations fall steadily with the tempo)."""
+    suffices, as for the ``steps`` pattern, whose accelerations fall steadily with the tempo),
+    stopping where a slower one fails a check the one before passed: what fails there comes from
+    the pattern, not its speed (a CMU playground clip of 2,751 frames went on failing up to x2.5:
+    20 CPU seconds where stopping at x1.25 takes 5.5)."""
     tried: list[Attempt] = []
     first = make(factors[0])
     tried.append(first)
@@ -120,8 +123,9 @@ def _search(make: Callable[[float], Attempt], factors: list[float],
     if ascending:
         for k in factors[1:]:
             a = make(k)
+            worse = set(a.failed()) - set(tried[-1].failed())
             tried.append(a)
-            if a.feasible or set(a.failed()) & tempo_proof(a.motion):
+            if a.feasible or set(a.failed()) & tempo_proof(a.motion) or worse:
                 return (a if a.feasible else None), tried
         return None, tried
     last = make(factors[-1])
