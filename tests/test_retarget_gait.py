@@ -71,6 +71,18 @@ def test_steps_are_shortened_to_the_reach_and_the_feet_kept_a_stance_width_apart
     assert np.allclose(yaw, 0.0)  # straight walk: the feet still point ahead
 
 
+def test_a_wide_side_step_shrinks_like_a_long_one():
+    """Feet 0.3 m apart sideways (a thrower's side step): what lies beyond the robot's stance
+    width shrinks by the step factor, as a step's length does; a narrower human stance still
+    lands a stance width apart."""
+    soles, labels = _walk(stride=0.4, width=0.3)
+    out = shorten_steps(soles, labels, 0.25, width=0.09, max_turn=0.35)
+    laid = _centres(out, labels)
+    for (f0, _, c0), (f1, _, c1) in zip(laid[1:], laid[2:]):
+        if f0 != f1:
+            assert abs(c1[1] - c0[1]) == pytest.approx(0.09 + 0.25 * (0.3 - 0.09), abs=1e-9)
+
+
 def test_turns_are_kept_within_what_the_hips_can_twist():
     soles, labels = _walk(yaws=[0.8, 0.8, 1.6, 1.6])  # the human turns 0.8 rad per step pair
     out = shorten_steps(soles, labels, 0.5, width=0.09, max_turn=0.35)
@@ -109,6 +121,32 @@ def test_a_foot_turns_no_faster_than_its_swing_allows():
     assert yaw(out, *[(f, a) for f, a, _ in _centres(out, labels)][-1]) > 1.4  # caught up
 
 
+def test_a_foot_stepping_twice_in_a_row_stays_beside_the_one_it_stands_on():
+    """The right foot shuffles three times, turning 0.35 rad and moving 8 cm inwards each time,
+    while the left stands (an MDM throw's pivot): laid from its own last placement it turned
+    1.3 rad from the left foot, which no pair of hip yaws reaches (the leg tracker lost the feet).
+    Each placement is laid from the left foot: within max_turn of it, a stance width to its side."""
+    T = 60
+    soles = np.full((T, 2, 4, 3), np.nan)
+    labels = np.zeros((T, 2), bool)
+    soles[:, 0] = _sole(0.0, 0.05)
+    labels[:, 0] = True
+    for i, a in enumerate(range(0, T, 15)):
+        soles[a:a + 10, 1] = _sole(0.0, -0.05 + 0.08 * i, -0.35 * i)
+        labels[a:a + 10, 1] = True
+    out = shorten_steps(soles, labels, 0.5, width=0.09, max_turn=0.35)
+
+    def yaw(s):
+        return np.arctan2(*(s[0, :2] + s[1, :2] - s[2, :2] - s[3, :2])[::-1])
+
+    left = out[0, 0]
+    for a in range(15, T, 15):
+        right = out[a, 1]
+        assert abs(yaw(right) - yaw(left)) <= 0.35 + 1e-9
+        assert left.mean(axis=0)[1] - right.mean(axis=0)[1] >= 0.09 - 1e-9   # to the left foot's right
+    assert abs(yaw(out[45, 1]) - yaw(out[30, 1])) < 1e-9   # held at the hips' reach, not drifting on
+
+
 def test_every_lift_off_waits_for_a_double_support():
     labels = np.zeros((40, 2), bool)
     labels[:10, 0] = True      # left down, then flight 10-15, right lands at 15
@@ -126,6 +164,26 @@ def test_every_lift_off_waits_for_a_double_support():
     near[:20, 0], near[21:40, 0], near[:40, 1] = True, True, False
     near[:3, 1] = True
     assert (grounded(near, 20.0, 0.1, 0.1)[20] == near[20]).all()  # no landing to wait for: unchanged
+
+
+def test_a_swing_beside_a_flight_is_widened_once_the_flight_is_grounded():
+    """At 100 fps: the right foot down, a flight, the left lands and hops 5 frames, lands again,
+    another flight, the right lands. Widening alone finds no room for the hop (the right foot is
+    in the air around it); once the flights are grounded it does, and the double support before
+    each lift-off is given back."""
+    from motion2robot.retarget.footholds import walking_labels
+    from motion2robot.retarget.contacts import phases
+
+    labels = np.zeros((120, 2), bool)
+    labels[:26, 1] = labels[90:, 1] = True
+    labels[43:54, 0] = labels[59:81, 0] = True
+    out = walking_labels(labels, 100.0, 0.2, 0.2)
+    runs = sorted(phases(out), key=lambda r: r[1])
+    for f, a, b in runs:
+        later = [r for r in runs if r[0] == f and r[1] > a]
+        if later:
+            assert later[0][1] - b >= 19                       # the swing: 5 frames before
+            assert out[b - 1, 1 - f] and out[b, 1 - f]           # lifts off from a double support
 
 
 def test_stance_width_keeps_op3_soles_apart(op3):
@@ -188,6 +246,20 @@ def test_a_real_walk_is_walked_feet_held_lifted_and_balanced(op3):
     legs = 7 + np.flatnonzero(foot_ancestor_mask(op3).any(axis=1))
     native = np.abs(np.diff(motion.qpos[:, legs], 2, axis=0)).max() * motion.fps ** 2
     assert np.abs(acc[:, legs]).max() <= 1.5 * native
+
+
+@requires_shared
+def test_a_throw_that_pivots_is_stepped_with_the_arms_clear_of_the_new_legs(op3):
+    """MDM's throw #8 pivots on its left foot while the right shuffles round it, and swings its
+    arms past its hips: the shuffles are laid beside the standing foot (the tracker keeps every
+    sole corner on its plan) and the free solve's arms, clear of the human's legs, are pushed clear
+    of the regenerated ones (an elbow went 16 mm into a hip): the self-collision check passes."""
+    human = read_motion(MOTIONS / "mdm_results" / "mdm_throw_ball_results.npy", clip=8)[0]
+    motion = retarget(human, op3, RetargetOptions(tempo=1.0, legs="steps"))
+    assert motion.meta["solver"]["steps"]["tracking_error_m"] < 0.005
+    report = check(motion, op3, CheckOptions(physics=False))
+    assert report.checks["self_collision"]["ok"], report.reasons
+    assert report.checks["joint_limits"]["ok"], report.reasons
 
 
 @requires_shared

@@ -4,8 +4,9 @@ A human stride scaled to a small robot is still too long for it (op3: the Bandai
 0.22 m between the feet, 80 % of its straight leg), and a human sets its feet closer together than
 the robot's hips. :func:`shorten_steps` re-lays the placements step by step: each step keeps the
 human's turn and sideways offset, its fore-aft length shrinks by the clip's :func:`step_factor`,
-and a foot set beside the other stays :func:`stance_width` to its side. Every placement keeps its
-yaw. :func:`grounded` gives every lift-off a double support before it (the human's flight phases
+and a foot set beside the other stays :func:`stance_width` to its side (a wider human step's excess
+shrinks by the same factor). A foot that steps twice in a row is laid from the foot it stands
+beside. Every placement keeps its yaw within the hips' reach. :func:`grounded` gives every lift-off a double support before it (the human's flight phases
 and heel-up frames leave none); :func:`filled` gives a foot in the air at either end of the clip
 its nearest placement. Units: metres, radians, seconds; world frame z up.
 """
@@ -34,12 +35,17 @@ def _sole_yaw(corners: np.ndarray) -> float:
 
 def _steps(labels: np.ndarray) -> list[tuple[int, int, int, tuple[int, int, int] | None]]:
     """The contact phases in order of their first frame as (foot, first, end, reference): the
-    reference is the phase before it, None for the phases the clip starts with."""
+    reference is the phase the robot stands on as the foot lands, i.e. the other foot's latest
+    phase if that foot is down in the frame before (a foot stepping twice in a row is laid from
+    the other foot, not from its own last placement: its shuffles must not drift away from the
+    foot it stands beside), else the phase before it; None for the phases the clip starts with."""
     runs = sorted(phases(labels), key=lambda r: (r[1], r[0]))
-    out, prev = [], None
-    for f, a, b in runs:
-        out.append((f, a, b, prev if prev is not None and prev[1] < a else None))
-        prev = (f, a, b)
+    out = []
+    for i, (f, a, b) in enumerate(runs):
+        before = [r for r in runs[:i] if r[1] < a]
+        stood = [r for r in before if r[0] != f and r[2] >= a]
+        ref = stood[-1] if stood else (before[-1] if before else None)
+        out.append((f, a, b, ref))
     return out
 
 
@@ -81,10 +87,12 @@ def _turned(sole: np.ndarray, centre: np.ndarray, yaw: float) -> np.ndarray:
 def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float, max_turn: float,
                   turn_rate: float = np.inf) -> np.ndarray:
     """Placements re-laid step by step (:func:`_steps`), each from the re-laid placement it steps
-    from: the step keeps the human's sideways offset and turn in that placement's frame, its
-    fore-aft length shrinks by ``k``, a foot set beside the other lands at least ``width`` (m) to
-    its own side of it (the robot's own stance width: its hip rolls cannot hold the body over a
-    foot set inside the hip, as a human's narrower placements would ask), and a foot turns at
+    from: the step keeps the human's turn in that placement's frame, its fore-aft length shrinks
+    by ``k``, a foot set beside the other lands at least ``width`` (m) to its own side of it (the
+    robot's own stance width: its hip rolls cannot hold the body over a foot set inside the hip,
+    as a human's narrower placements would ask) and what the human's step reaches sideways beyond
+    that shrinks by ``k`` too (op3: a thrower's side step of 0.19 m between the feet held the swing
+    ankle's roll at its limit, a kink of 400-800 rad/s^2 at 100 fps), and a foot turns at
     most ``max_turn`` (rad) from the one it steps from (the hip yaws' range; the human's heading
     is caught up on the next steps). The feet the clip starts on are turned to within
     ``max_turn / 2`` of their mean heading; a foot turns from its own last placement by at most
@@ -107,7 +115,7 @@ def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float,
         fore, lat = float(gap @ fwd), float(gap @ left)
         if ref[0] != f:
             side = 1.0 if f == 0 else -1.0
-            lat = side * max(side * lat, width)
+            lat = side * (width + k * max(side * lat - width, 0.0))
         else:
             lat *= k
         base = out[ref[1], ref[0]]
@@ -190,6 +198,20 @@ def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: floa
             stop = e + int(nxt[0])
         if stop > e:
             out[e:stop, g] = True
+    return out
+
+
+def walking_labels(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float) -> np.ndarray:
+    """(T, 2) contact labels of a walking pattern from the human's (at ``fps``): every swing
+    widened to ``min_swing_s`` (:func:`widen_swings`), every lift-off after a double support of
+    ``overlap_s`` (:func:`grounded`), then both again: a swing beside a flight phase has no room
+    (the other foot is in the air) until the flight is grounded (a GMD clip at 100 fps kept a
+    0.05 s swing there: 600 rad/s^2 in a knee), and widening it can take the double support
+    before the other foot's lift-off, which the second grounding gives back."""
+    n_swing = int(np.ceil(min_swing_s * fps - 1e-9))
+    out = labels
+    for _ in range(2):
+        out = grounded(widen_swings(out, n_swing), fps, overlap_s, min_swing_s)
     return out
 
 

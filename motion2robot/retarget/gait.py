@@ -28,7 +28,10 @@ then a ZMP-based waist trajectory):
 5. per frame, the root and the leg hinges (:class:`~.leg_tracker.LegTracker`) with every sole
    corner on its plan and the CoM on its path: smooth targets give smooth joints;
 6. the multi-body ZMP of the result (arms and swing legs included) measured and the CoM path
-   shifted by the cart-table QP again, up to ZMP_ROUNDS tracking rounds in all.
+   shifted by the cart-table QP again, up to ZMP_ROUNDS tracking rounds in all;
+7. the arms and head, clear of the human's legs in the free solve, pushed clear of the
+   regenerated ones by themselves (:func:`~.solve_stages.free_limbs_clear`; an MDM thrower's elbow
+   went 16 mm into a hip), within the servos' velocity and the joint limits.
 
 What the robot does differs from the human in stride length and path (reported in
 ``meta["solver"]["steps"]``: the step factor, the stance width, the path covered); the policy of
@@ -44,15 +47,15 @@ from dataclasses import replace
 import numpy as np
 
 from motion2robot.motion.human import HumanMotion
-from motion2robot.retarget.constraints import support_margin, support_planes
+from motion2robot.retarget.constraints import clamp_velocity, support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
 from motion2robot.retarget.contacts import anchor_soles
-from motion2robot.retarget.footholds import filled, grounded, shorten_steps, stance_width, step_factor, widen_swings
+from motion2robot.retarget.footholds import filled, shorten_steps, stance_width, step_factor, walking_labels
 from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
 from motion2robot.retarget.smoothing import low_pass, smooth_hinges
-from motion2robot.retarget.solve_stages import free_solve, pinned_solve
+from motion2robot.retarget.solve_stages import free_limbs_clear, free_solve, pinned_solve
 from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, multibody_zmp
 from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
@@ -104,8 +107,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
     native = float(human.meta.get("resampled_from_fps") or human.fps)
     min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
-    labels = widen_swings(setup.labels, int(np.ceil(min_swing * setup.fps - 1e-9)))
-    setup = replace(setup, labels=grounded(labels, setup.fps, OVERLAP_S, min_swing))
+    setup = replace(setup, labels=walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
     upper_body = Q.copy()
@@ -120,6 +122,9 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
                          place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN, turn_rate),
                          swing_shape=SWING_SHAPE)
     Q, walked, figures = walk_pattern(setup, plan, Q, upper_body)
+    # the free solve's arms kept clear of the human's legs, not of the regenerated ones
+    Q = free_limbs_clear(setup, walked.params(setup), Q)
+    Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
     pts = setup.points(Q)
     solve_s = time.perf_counter() - t_solve
     path = np.linalg.norm(np.diff(Q[:, :2], axis=0), axis=1).sum()

@@ -169,6 +169,25 @@ def free_limb_gaps(setup: Setup) -> np.ndarray:
     return (np.abs(g[1:] - g[0]) > 1e-9).any(axis=0)
 
 
+def free_limbs_clear(setup: Setup, P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """``Q`` (T, nq) with the self-collisions the arms and head can get out of
+    (:func:`free_limb_gaps`) taken out by them alone (:func:`collision_pushes`), each push spread
+    over the neighbouring frames, up to PUSH_ROUNDS rounds; ``P``: the plan's parameters."""
+    free = free_limbs(setup.robot)
+    reach = free_limb_gaps(setup)   # a collision of the legs alone is left to the caller
+    for _ in range(PUSH_ROUNDS):
+        # a spread push is a different combination of the free limbs' joints than the frame's own
+        # push, and can leave a little of the collision: the next round pushes and spreads that
+        # (keeping a frame's own push there instead left a one-frame notch: 93 rad/s^2 at 100 fps)
+        hit = setup.points(Q)[3][:, reach].min(axis=1, initial=0.0) < -PUSH_TOLERANCE
+        if not hit.any():
+            break
+        pushed = collision_pushes(setup, P, Q, hit)
+        pushed[:, 7:] = spread_correction(Q[:, 7:], pushed[:, 7:], free, setup.fps)
+        Q = pushed
+    return Q
+
+
 def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarray:
     """Stage 4: the joint filter, then the projection back onto the hard constraints in three
     steps. The pinned soles back with every joint, without the self-collision rows (to second
@@ -181,24 +200,13 @@ def joint_smoothing(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> np.ndarra
     root)."""
     robot = setup.robot
     P = plan.params(setup)
-    free = free_limbs(robot)
     Q = smooth_configuration(setup, Q)
     # the soles back first, with every joint but without the self-collision rows: a frame whose
     # legs are held below would otherwise put its soles back by the root alone, unlike its
     # neighbours (G1 throw at 100 fps: a 0.07 mm root step, 0.9 m/s^2)
     Q, _ = correct(setup.problem, P, Q, robot.lower, robot.upper, setup.max_step, 1, extra=EXTRA_CORRECTIONS,
                    collisions=False)
-    reach = free_limb_gaps(setup)   # a collision of the legs alone is left to the last projection
-    for _ in range(PUSH_ROUNDS):
-        # a spread push is a different combination of the free limbs' joints than the frame's own
-        # push, and can leave a little of the collision: the next round pushes and spreads that
-        # (keeping a frame's own push there instead left a one-frame notch: 93 rad/s^2 at 100 fps)
-        hit = setup.points(Q)[3][:, reach].min(axis=1, initial=0.0) < -PUSH_TOLERANCE
-        if not hit.any():
-            break
-        pushed = collision_pushes(setup, P, Q, hit)
-        pushed[:, 7:] = spread_correction(Q[:, 7:], pushed[:, 7:], free, setup.fps)
-        Q = pushed
+    Q = free_limbs_clear(setup, P, Q)
     # every joint, on the frames still off a hard constraint (the arms' pushes moved the CoM, a
     # collision the arms could not resolve)
     v = setup.problem.violation_eval(len(Q))(Q, P)[0][:, 0]
