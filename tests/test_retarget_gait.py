@@ -263,6 +263,29 @@ def test_a_throw_that_pivots_is_stepped_with_the_arms_clear_of_the_new_legs(op3)
 
 
 @requires_shared
+def test_a_finer_rate_walks_the_native_schedule(op3):
+    """A 20 fps GMD walk with a hop retargeted at 100 fps: its contacts are scheduled on the
+    native frames (detected at 100 fps they flickered into a 0.05 s hop beside a flight phase),
+    so the peak root and joint accelerations stay within 1.5x of the native rate's (they were
+    5.1x and 3.0x)."""
+    human = read_motion(MOTIONS / "mdm_results" / "gmd_template_joints.npy")[0]
+    assert human.fps == 20.0
+    native = retarget(human, op3, RetargetOptions(tempo=1.0, legs="steps"))
+    fine = retarget(human, op3, RetargetOptions(tempo=1.0, legs="steps", fps=100.0))
+
+    def peaks(m):
+        acc = np.abs(np.diff(m.qpos, 2, axis=0)) * m.fps ** 2
+        return acc[:, :3].max(), acc[:, 7:].max()
+
+    (rn, jn), (rf, jf) = peaks(native), peaks(fine)
+    assert rf <= 1.5 * max(rn, 0.5) and jf <= 1.5 * max(jn, 5.0)
+    # the same schedule in seconds: each 100 fps frame's contacts are its nearest 20 fps frame's
+    cn, cf = np.asarray(native.meta["contacts"], bool), np.asarray(fine.meta["contacts"], bool)
+    nearest = np.clip(np.rint(np.arange(len(cf)) / 5.0).astype(int), 0, len(cn) - 1)
+    assert (cf == cn[nearest]).mean() > 0.98
+
+
+@requires_shared
 def test_cli_legs_steps(tmp_path, capsys):
     src = MOTIONS / "bvh" / "bandai_walk-back_normal_001.bvh"
     out = tmp_path / "w.npz"

@@ -47,9 +47,10 @@ from dataclasses import replace
 import numpy as np
 
 from motion2robot.motion.human import HumanMotion
+from motion2robot.motion.ops import resample
 from motion2robot.retarget.constraints import clamp_velocity, support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
-from motion2robot.retarget.contacts import anchor_soles
+from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted
 from motion2robot.retarget.footholds import filled, shorten_steps, stance_width, step_factor, walking_labels
 from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
@@ -107,7 +108,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
     native = float(human.meta.get("resampled_from_fps") or human.fps)
     min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
-    setup = replace(setup, labels=walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing))
+    setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
     upper_body = Q.copy()
@@ -139,6 +140,21 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     motion = robot_motion(replace(setup, kp=along), walked, Q, pts, stages, False)
     return motion.with_(meta={**motion.meta, "human_root_xy": setup.kp[:, 0, :2].tolist(),
                               "solver": {**motion.meta["solver"], "steps": figures}})
+
+
+def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_swing: float) -> np.ndarray:
+    """(T, 2) walking labels (:func:`~.footholds.walking_labels`) of ``human`` at its output rate,
+    scheduled at the clip's ``native`` rate: a clip resampled finer (``--fps``) has its contacts
+    detected and its swings widened and grounded on the native frames, then each output frame
+    takes the nearest native frame's, so every rate walks the same schedule in seconds (detected
+    at 100 fps, a 20 fps GMD clip's contacts flickered into a 0.05 s hop beside a flight, and a
+    60 fps CMU dance's into 0.04 s swings: 3-5x the native peaks)."""
+    if not setup.opt.contacts or abs(native - setup.fps) < 1e-9:
+        return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing)
+    coarse = resample(human, native)
+    labels = walking_labels(planted(contact_labels(coarse)[0], coarse), native, OVERLAP_S, min_swing)
+    nearest = np.rint(np.arange(len(setup.labels)) * native / setup.fps).astype(int)
+    return labels[np.clip(nearest, 0, len(labels) - 1)]
 
 
 def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
