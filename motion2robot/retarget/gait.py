@@ -14,8 +14,10 @@ then a ZMP-based waist trajectory):
    walked; a human walk's heel-up frames leave none), the human's placements re-laid step by step, each step
    shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
    at the robot's own stance width, each foot turning no faster than TURN_SPEED of its hip's
-   velocity limit allows over its swing; every swing at least MIN_SWING_FRAMES of the clip's own
-   rate; the contact plan's swings go straight between them, lifted
+   velocity limit allows over its swing; a foot stepping twice in a row laid from the one it
+   stands beside; every swing at least MIN_SWING_FRAMES of the clip's own rate, the whole
+   schedule made on the clip's own frames at any output rate (:func:`native_walking_labels`);
+   the contact plan's swings go straight between them, lifted
    (:mod:`~.footsteps`); a foot in the air at either end of the clip stands at its nearest placement;
 3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the pinned
    solve's low-passed and kept below what the legs reach (:func:`~.leg_tracker.root_height`);
