@@ -116,7 +116,8 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     upper_body = Q.copy()
     free_corners = setup.points(Q)[1]
     Q, pinned = pinned_solve(setup, plan_contacts(setup, free_corners), Q)
-    longest = STEP_REACH * float(LegTracker(robot).straight_reach().min())
+    tracker = LegTracker(robot)
+    longest = STEP_REACH * float(tracker.straight_reach().min())
     k = step_factor(anchor_soles(free_corners, setup.labels), setup.labels, longest)
     width = stance_width(robot)
     legs = foot_ancestor_mask(robot).any(axis=1)
@@ -124,7 +125,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
                          place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN, turn_rate),
                          swing_shape=SWING_SHAPE)
-    Q, walked, figures = walk_pattern(setup, plan, Q, upper_body)
+    Q, walked, figures = walk_pattern(setup, plan, Q, upper_body, tracker)
     # the free solve's arms kept clear of the human's legs, not of the regenerated ones
     Q = free_limbs_clear(setup, walked.params(setup), Q)
     Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
@@ -169,13 +170,13 @@ def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
     return low_pass(((yaw[:, 0] + right) / 2)[:, None], fps, ROOT_CUTOFF_HZ)[:, 0]
 
 
-def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray,
-                 upper_body: np.ndarray) -> tuple[np.ndarray, ContactPlan, dict]:
+def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray, upper_body: np.ndarray,
+                 tracker: LegTracker) -> tuple[np.ndarray, ContactPlan, dict]:
     """Stages 3-6 of the module text on the pinned solve ``Q``, the free solve ``upper_body``
-    (whose upper-body and head hinges are kept) and the re-laid contact ``plan``: the trajectory,
-    the plan it stands on (every foot planned in every frame) and figures."""
+    (whose upper-body and head hinges are kept) and the re-laid contact ``plan``, solved by
+    ``tracker`` (the robot's): the trajectory, the plan it stands on (every foot planned in every
+    frame) and figures."""
     robot, fps = setup.robot, setup.fps
-    tracker = LegTracker(robot)
     corners, contact = filled(plan, setup.where)
     planes, support = support_planes(np.where(contact[:, :, None, None], corners, np.nan), contact, plan.margin)
     out = Q.copy()
