@@ -153,8 +153,25 @@ def test_idempotence_on_a_real_clip() -> None:
     again, report = retarget_and_check(p.human, _robot())
     assert report is not None and report.feasible  # executable whenever human was
     rms = hinge_rms(p.robot_motion, again)
-    # the direct mapping back is 0.07 rad away; the corrected human' within 0.01 rad (measured 0.006)
+    # the direct mapping back is 0.07 rad away; the corrected human' within 0.01 rad (measured 0.004)
     assert p.rounds[0] > 0.03 and rms < 0.015 and rms < p.rounds[0] / 4
+
+
+@requires_shared
+def test_the_correction_stops_when_its_rounds_stall() -> None:
+    from motion2robot.projection.correction import STALL_ROUNDS, refine
+
+    _, p = _projected()
+    robot, q0 = _robot(), p.robot_motion
+    calls = []
+
+    def stuck(h):  # a pipeline that misses by the same 0.02 rad whatever it is given
+        calls.append(h)
+        return q0.with_(qpos=np.concatenate([q0.qpos[:, :7], q0.qpos[:, 7:] + 0.02], axis=1))
+
+    best, errors = refine(p.direct, q0, robot, stuck, rounds=16)
+    assert len(calls) == len(errors) == STALL_ROUNDS + 1 and np.allclose(errors, 0.02)
+    assert best is p.direct  # no round was better than the first
 
 
 def _robot():

@@ -17,7 +17,12 @@ from motion2robot.robot_motion import RobotMotion
 #: the original and of ``human'``.
 TOLERANCE = 1e-3
 #: Correction rounds at most (each one retargeting at the chosen tempo and legs, no judging).
-ROUNDS = 8
+ROUNDS = 16
+#: The rounds stop early when the last STALL_ROUNDS rounds lowered the best RMS met before them
+#: by less than STALL_GAIN (a fraction): the correction has stalled (a motion whose pipeline
+#: re-lays what it is given, like a ``steps`` result's footholds, does not converge).
+STALL_ROUNDS = 3
+STALL_GAIN = 0.05
 #: Rounds remembered by the Anderson mixing of the correction.
 MEMORY = 4
 
@@ -49,8 +54,9 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
     """The target correction (step 5 of the module text): starting from ``direct`` (= P(motion)),
     solve the fixed point ``P(solve(h)) = P(motion)`` for ``h`` by Anderson-accelerated rounds of
     ``h <- h + (P(motion) - P(solve(h)))`` (:func:`anderson_step`, the last ``memory`` rounds)
-    until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion``. Returns the best ``h`` met and
-    the RMS of every round tried (a round whose solve changes the frame count stops the rounds)."""
+    until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion`` or the rounds stall
+    (STALL_ROUNDS, STALL_GAIN). Returns the best ``h`` met and the RMS of every round tried (a
+    round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
     h, best, errors = direct, (float("inf"), direct), []
     xs: list[np.ndarray] = []
@@ -62,6 +68,8 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         if err < best[0]:
             best = (err, h)
         if err <= tolerance or not np.isfinite(err):
+            break
+        if len(errors) > STALL_ROUNDS and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]):
             break
         # compared at the scale this solve computed from h's bone lengths: the fixed point is in
         # the robot's space (keypoints equal), not at the original's scale
