@@ -28,9 +28,9 @@ def _cap(value: str) -> float:
 
 
 def add_retarget_options(p: argparse.ArgumentParser) -> None:
+    """--tempo, --tempo-cap, --legs, --no-balance."""
     from motion2robot.retarget.options import LEGS
 
-    """--tempo, --tempo-cap, --legs, --no-balance."""
     p.add_argument("--tempo", type=_tempo, default="auto", metavar="human|similar|auto|K",
                    help="timing of the robot motion: 'human' keeps the generated timing, 'similar' plays it "
                         "dynamically similar for the robot's size (durations x sqrt(leg scale)), 'auto' (default) "

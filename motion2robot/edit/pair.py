@@ -30,6 +30,7 @@ from motion2robot.edit.window import edit_solution, human_frames
 from motion2robot.errors import InputFileError
 from motion2robot.motion.human import SMPL22_PARENTS, HumanMotion
 from motion2robot.motion.ops import resample, trim
+from motion2robot.retarget.options import LEG_MODES
 from motion2robot.robot_motion import RobotMotion
 from motion2robot.util.ranges import frame_ranges
 
@@ -83,8 +84,8 @@ def _fixed_like(opts, src: RobotMotion):
     """The options with the tempo and legs the source's policies chose (so frames line up)."""
     tempo = src.meta.get("tempo")
     legs = (src.meta.get("fallback") or {}).get("mode") if isinstance(src.meta.get("fallback"), dict) else None
-    if legs not in ("whole", "steps", "stance"):
-        legs = opts.legs if getattr(opts, "legs", "auto") in ("whole", "steps", "stance") else "whole"
+    if legs not in LEG_MODES:
+        legs = opts.legs if getattr(opts, "legs", "auto") in LEG_MODES else "whole"
     changes = {"legs": legs}
     if isinstance(tempo, (int, float)):
         changes["tempo"] = float(tempo)

@@ -66,6 +66,14 @@ def _rotz(yaw: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
 
+def sole_yaw(corners: np.ndarray) -> np.ndarray:
+    """Yaw (rad, in (-pi, pi]) of soles from their (..., 4, 3) corners (front-left, front-right,
+    back-right, back-left): the direction from the back edge's midpoint to the front edge's."""
+    xy = corners[..., :2]
+    fwd = (xy[..., 0, :] + xy[..., 1, :]) - (xy[..., 2, :] + xy[..., 3, :])
+    return np.arctan2(fwd[..., 1], fwd[..., 0])
+
+
 def anchor_soles(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """Pinned sole corners (T, 2, 4, 3) for every contact frame (NaN elsewhere), from the sole
     corners ``corners`` (T, 2, 4, 3) of an unpinned solve: per phase, the centre and yaw of the
@@ -73,8 +81,7 @@ def anchor_soles(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
     out = np.full(corners.shape, np.nan)
     xy = corners[..., :2]                                             # (T, 2, 4, 2)
     centre = xy.mean(axis=2)                                          # (T, 2, 2)
-    fwd = (xy[:, :, 0] + xy[:, :, 1]) - (xy[:, :, 2] + xy[:, :, 3])   # front minus back
-    yaw = np.arctan2(fwd[..., 1], fwd[..., 0])                        # (T, 2)
+    yaw = sole_yaw(corners)                                           # (T, 2)
     rel = np.einsum("tfij,tfkj->tfki", _rotz(-yaw), xy - centre[:, :, None])  # sole layouts, (T, 2, 4, 2)
     for f, a, b in phases(labels):
         layout = rel[a:b, f].mean(axis=0)

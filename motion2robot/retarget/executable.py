@@ -39,6 +39,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.contacts import contact_labels
 from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
+from motion2robot.retarget.options import LEG_MODES
 from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
 from motion2robot.retarget.weight_shift import short_shifts
@@ -48,7 +49,7 @@ from motion2robot.robot_motion import RobotMotion
 #: (human motion at the attempt's tempo, legs mode) -> robot motion.
 Solve = Callable[[HumanMotion, str], RobotMotion]
 #: Legs modes ``auto`` may try (their order: :func:`auto_legs`).
-AUTO_LEGS = ("whole", "steps", "stance")
+AUTO_LEGS = LEG_MODES
 #: m (human): a pelvis that goes farther than this from where it starts travels (a walk, not a
 #: motion in place).
 TRAVEL_M = 0.5

@@ -17,7 +17,7 @@ import numpy as np
 
 from motion2robot.errors import SolverError
 from motion2robot.retarget.contact_plan import ContactPlan
-from motion2robot.retarget.contacts import phases
+from motion2robot.retarget.contacts import phases, sole_yaw
 from motion2robot.robot.chains import hip_hinges
 from motion2robot.robot.robot import Robot
 
@@ -28,9 +28,8 @@ class PatternError(SolverError):
 
 
 def _sole_yaw(corners: np.ndarray) -> float:
-    """Yaw (rad) of a sole from its (4, 3) corners (front-left, front-right, back-right, back-left)."""
-    fwd = corners[:2, :2].sum(axis=0) - corners[2:, :2].sum(axis=0)
-    return float(np.arctan2(fwd[1], fwd[0]))
+    """Yaw (rad) of one sole from its (4, 3) corners (:func:`~.contacts.sole_yaw`)."""
+    return float(sole_yaw(corners))
 
 
 def _steps(labels: np.ndarray) -> list[tuple[int, int, int, tuple[int, int, int] | None]]:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2robot.retarget.anchor_gap import foot_segments, segment_distance
-from motion2robot.retarget.contacts import phases
+from motion2robot.retarget.contacts import phases, sole_yaw
 
 #: Swing apex as a fraction of the robot's standing root height (op3: ~2 cm, G1: ~6 cm).
 APEX_RATIO = 0.08
@@ -106,8 +106,7 @@ def _place(centre: np.ndarray, yaw: np.ndarray, layout: np.ndarray, z: np.ndarra
 def _centre_yaw(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Centres (n, 2) and unwrapped yaws (n,) of (n, 4, 3) sole corners (NaN rows stay NaN)."""
     xy = corners[..., :2]
-    fwd = (xy[:, 0] + xy[:, 1]) - (xy[:, 2] + xy[:, 3])
-    yaw = np.arctan2(fwd[:, 1], fwd[:, 0])
+    yaw = sole_yaw(corners)
     ok = np.isfinite(yaw)
     yaw[ok] = np.unwrap(yaw[ok])
     return xy.mean(axis=1), yaw

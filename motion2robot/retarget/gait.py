@@ -52,7 +52,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget.constraints import clamp_velocity, support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
-from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted
+from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted, sole_yaw
 from motion2robot.retarget.footholds import filled, shorten_steps, stance_width, step_factor, walking_labels
 from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
@@ -164,8 +164,7 @@ def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
     """(T,) yaw (rad, unwrapped) between the two soles' headings (``corners`` (T, 2, 4, 3): front
     corners first), low-passed at ROOT_CUTOFF_HZ: the upright pelvis of a walking pattern faces
     where the feet do."""
-    fwd = corners[:, :, :2, :2].sum(axis=2) - corners[:, :, 2:, :2].sum(axis=2)     # (T, 2, 2)
-    yaw = np.unwrap(np.arctan2(fwd[..., 1], fwd[..., 0]), axis=0)
+    yaw = np.unwrap(sole_yaw(corners), axis=0)                                     # (T, 2)
     right = yaw[:, 1] + np.round((yaw[:, 0] - yaw[:, 1]) / (2 * np.pi)) * 2 * np.pi
     return low_pass(((yaw[:, 0] + right) / 2)[:, None], fps, ROOT_CUTOFF_HZ)[:, 0]
 

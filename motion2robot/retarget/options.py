@@ -9,8 +9,10 @@ from motion2robot.retarget.costs import Weights
 from motion2robot.retarget.scale import Scale
 from motion2robot.retarget.tempo import DEFAULT_CAP, parse_cap, parse_tempo
 
+#: The legs modes (what ``legs`` may be besides ``auto``, which picks one of them).
+LEG_MODES = ("whole", "steps", "stance")
 #: What ``legs`` may be.
-LEGS = ("auto", "whole", "steps", "stance")
+LEGS = ("auto", *LEG_MODES)
 
 
 @dataclass(frozen=True)
@@ -39,7 +41,8 @@ class RetargetOptions:
     tempo: "human" | "similar" | "auto" | a slow-down factor (:mod:`~motion2robot.retarget.tempo`);
     tempo_cap: the slowest ``auto`` may go; legs: "whole" | "steps" | "stance" | "auto" (whole
     body, the walking pattern of :mod:`~motion2robot.retarget.gait`, the stance alternative of
-    :mod:`~motion2robot.retarget.stance`, or the first of them that passes); with "auto" in either, the result is judged by ``check`` and the policy of
+    :mod:`~motion2robot.retarget.stance`, or the first of them that passes); with "auto" in
+    either, the result is judged by ``check`` and the policy of
     :mod:`~motion2robot.retarget.executable` picks the attempt. lift_feet: every sole follows the
     plan of :mod:`~motion2robot.retarget.footsteps` (stance pinned, swings lifted clear of the floor
     and of the other foot); off = soles pinned in contact frames only, free otherwise."""
