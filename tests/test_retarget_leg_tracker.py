@@ -13,6 +13,7 @@ from motion2robot.motion import read_motion
 from motion2robot.motion.ops import trim
 from motion2robot.retarget import RetargetOptions, retarget
 from motion2robot.retarget import leg_tracker as lt
+from motion2robot.retarget import tracker_kernel
 from motion2robot.retarget.leg_tracker import LegTracker
 from motion2robot.robot import load_robot
 from tests._shared import MOTIONS, requires_shared
@@ -136,10 +137,15 @@ def test_leg_tracker_matches_a_dense_reference_on_a_real_walk(op3, walk_problem)
 
 
 @requires_shared
-def test_leg_tracker_generic_paths_give_the_fast_paths_numbers(op3, walk_problem):
+@pytest.mark.parametrize("compiled", [True, False], ids=["C loop", "Python loop"])
+def test_leg_tracker_generic_paths_give_the_fast_paths_numbers(op3, walk_problem, compiled, monkeypatch):
     """Leg hinges addressed by an index array (as for a model whose leg joints are not consecutive
     in qpos) and the limit depth from the two one-sided terms (as for hinges narrower than two
     LIMIT_ZONEs): bit for bit the same trajectory as the slice/clip paths op3 takes."""
+    if not compiled:
+        monkeypatch.setattr(tracker_kernel, "library", lambda: None)
+    elif tracker_kernel.library() is None:
+        pytest.skip("no C compiler: the tracker runs its Python loop")
     fast = LegTracker(op3)
     assert isinstance(fast._legq, slice) and fast._zones_apart
     generic = LegTracker(op3)
@@ -147,3 +153,21 @@ def test_leg_tracker_generic_paths_give_the_fast_paths_numbers(op3, walk_problem
     a, ea = fast.solve(*walk_problem)
     b, eb = generic.solve(*walk_problem)
     assert np.array_equal(a, b) and np.array_equal(ea, eb)
+
+
+@requires_shared
+def test_the_compiled_frame_loop_gives_the_python_loops_numbers(op3, walk_problem, monkeypatch):
+    """The C frame loop (:mod:`~motion2robot.retarget.tracker_kernel`) against the Python one, from
+    the previous frames and from a start trajectory (a later round's): bit for bit."""
+    if tracker_kernel.library() is None:
+        pytest.skip("no C compiler: the tracker runs its Python loop")
+    Q, corners, com_xy, fps = walk_problem[:4]
+    compiled = LegTracker(op3).solve(Q, corners, com_xy, fps)
+    shifted = com_xy + 0.003  # a second round: the CoM path moved, each frame from the first round's
+    compiled_again = LegTracker(op3).solve(Q, corners, shifted, fps, compiled[0])
+    monkeypatch.setattr(tracker_kernel, "library", lambda: None)
+    python = LegTracker(op3).solve(Q, corners, com_xy, fps)
+    python_again = LegTracker(op3).solve(Q, corners, shifted, fps, python[0])
+    for a, b in zip(compiled + compiled_again, python + python_again):
+        assert np.array_equal(a, b)
+    assert not np.array_equal(compiled[0], compiled_again[0])  # the second round did move

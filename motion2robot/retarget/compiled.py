@@ -135,10 +135,11 @@ def _run(cmd: list[str]) -> None:
     subprocess.run(cmd, check=True, capture_output=True)
 
 
-def _compile(src: Path, out: Path) -> None:
+def _compile(src: Path, out: Path, extra: tuple[str, ...] = ()) -> None:
+    """``src`` compiled with CFLAGS (and ``extra``: flags, libraries) into the library ``out``."""
     cc = os.environ.get("CC", "gcc")
     tmp = out.with_name(out.name + f".{os.getpid()}.tmp")
-    _run([cc, *CFLAGS, str(src), "-o", str(tmp), "-lm"])
+    _run([cc, *CFLAGS, str(src), *extra, "-o", str(tmp), "-lm"])
     tmp.replace(out)  # atomic: concurrent processes never load a half-written library
 
 

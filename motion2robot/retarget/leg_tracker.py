@@ -6,9 +6,12 @@ Units: metres, radians; world frame z up; quaternions wxyz.
 
 from __future__ import annotations
 
+import functools
+
 import mujoco
 import numpy as np
 
+from motion2robot.retarget import tracker_kernel
 from motion2robot.retarget.smoothing import low_pass
 from motion2robot.robot.chains import foot_ancestor_mask, hip_hinges
 from motion2robot.robot.robot import Robot
@@ -165,13 +168,13 @@ class LegTracker:
         np.multiply(over, self._J_limit, r_limit)
         if prev is None:
             np.multiply(r_first, self._w_first, r_first)
-            return float(r_first @ r_first)
+            return mujoco.mju_dot(r_first, r_first)  # MuJoCo's sum, as the C loop's
         # the previous frame's solution: the continuous branch, no jumps
         np.subtract(qpos[:3], prev[0], r_pos)
         mujoco.mju_subQuat(r_rot, qpos[3:7], prev[1])
         np.subtract(q, prev[2], r_legs)
         np.multiply(r_all, self._w_rows, r_all)
-        return float(r_all @ r_all)
+        return mujoco.mju_dot(r_all, r_all)
 
     def _normal(self, r: np.ndarray) -> None:
         """The Gauss-Newton normal equations of the rows ``r`` (all, or a first frame's) at the posture in
@@ -256,6 +259,9 @@ class LegTracker:
         J[27:30, 3:6] = ROOT_TURN_WEIGHT * np.eye(3)
         J[self.n_rows - nc:] = w_prev * np.eye(nc)
         self._w_rows[self.n_rows - nc:] = w_prev
+        native = self._native(Q, corners, com_xy, start)
+        if native is not None:
+            return native
         lo_buf, hi_buf = np.zeros(len(self.legs), dtype=bool), np.zeros(len(self.legs), dtype=bool)
         for t in range(len(Q)):
             q = Q[t].copy()
@@ -296,6 +302,20 @@ class LegTracker:
                 err[t:] = err[t]
                 break
         return out, err
+
+    def _native(self, Q: np.ndarray, corners: np.ndarray, com_xy: np.ndarray,
+                start: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
+        """``solve``'s frame loop in C (:mod:`~.tracker_kernel`, the same steps), once ``solve`` has
+        laid out the soft rows and the weights; None without the compiled loop."""
+        i32 = functools.partial(np.ascontiguousarray, dtype=np.int32)
+        ints = i32([self.model.nq, self.model.nv, len(self.legs), self.robot.root_body, self._zones_apart,
+                    IK_ITERATIONS])
+        consts = np.array([2.0 * LIMIT_WEIGHT / LIMIT_ZONE, STEP_TOLERANCE, 1e-12 * HARD_WEIGHT ** 2, DAMPING,
+                           MAX_STEP, HARD_WEIGHT, LOST])
+        limits = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in (self.lo, self.hi, self._lo_zone, self._hi_zone))
+        return tracker_kernel.track(self.model, self.data, ints, i32(self.qadr), i32(self.cols), i32(self.sites),
+                                    limits, self._w_rows, consts, self._J, Q, start,
+                                    np.reshape(corners, (len(Q), 24)), com_xy)
 
     def hips(self, Q: np.ndarray) -> np.ndarray:
         """(T, 2, 3) world positions (m) of each leg's first hinge (its hip) in the frames of Q."""

@@ -76,6 +76,23 @@ def _second_difference(T: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rows, cols, vals
 
 
+@functools.lru_cache(maxsize=16)
+def _hessian(T: int, fps: float, jerk_time: float) -> ca.DM:
+    """The QP's cost matrix over (d_x, d_y, slack) (3T, 3T): the smoothness I + tau^2 D1'D1 +
+    tau^4 D2'D2 (+ jerk_time^6 D3'D3) on each axis, SLACK_COST on the slack; the same for every
+    clip of T frames at ``fps`` (cached; never modified)."""
+    r2, c2, v2 = _second_difference(T)
+    t = np.arange(T - 1)
+    D1 = _sparse(np.r_[t, t], np.r_[t, t + 1], np.r_[-np.ones(T - 1), np.ones(T - 1)] * fps, T - 1, T)
+    D2 = _sparse(r2, c2, v2 * fps ** 2, T, T)
+    tau = SMOOTH_TIME
+    Hd = ca.DM.eye(T) + tau ** 2 * ca.mtimes(D1.T, D1) + tau ** 4 * ca.mtimes(D2.T, D2)
+    if jerk_time > 0.0:
+        D3 = ca.mtimes(D1, D2)
+        Hd = Hd + jerk_time ** 6 * ca.mtimes(D3.T, D3)
+    return ca.diagcat(Hd, Hd, SLACK_COST * ca.DM.eye(T))
+
+
 def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, support: np.ndarray,
                      fps: float, jerk_time: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """CoM shift d (T, 2) putting the cart-table-corrected ZMP inside ``planes`` (T, HMAX, 3) rows
@@ -89,7 +106,6 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     ok = support & np.isfinite(zmp).all(axis=1)
     if T < 3 or not ok.any():
         return np.zeros((T, 2)), np.zeros(T)
-    r2, c2, v2 = _second_difference(T)
     # M = I - (z_c / g) fps^2 D2: the ZMP change per axis is M d; row t holds (t, 1) then its three
     # D2 entries (t-1, t, t+1, ends replicated), in this order
     frames = np.flatnonzero(ok)
@@ -112,16 +128,7 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
                          np.full((k, 1), -1.0)], axis=1).ravel()
     rhs = b - n_x * zmp[frames[fi], 0] - n_y * zmp[frames[fi], 1]
     A = _sparse(rr, cc, vv, k, 3 * T)
-    # smoothness: I + tau^2 D1'D1 + tau^4 D2'D2 on each axis; the slack: SLACK_COST (quadratic + linear)
-    t = np.arange(T - 1)
-    D1 = _sparse(np.r_[t, t], np.r_[t, t + 1], np.r_[-np.ones(T - 1), np.ones(T - 1)] * fps, T - 1, T)
-    D2 = _sparse(r2, c2, v2 * fps ** 2, T, T)
-    tau = SMOOTH_TIME
-    Hd = ca.DM.eye(T) + tau ** 2 * ca.mtimes(D1.T, D1) + tau ** 4 * ca.mtimes(D2.T, D2)
-    if jerk_time > 0.0:
-        D3 = ca.mtimes(D1, D2)
-        Hd = Hd + jerk_time ** 6 * ca.mtimes(D3.T, D3)
-    H = ca.diagcat(Hd, Hd, SLACK_COST * ca.DM.eye(T))
+    H = _hessian(T, float(fps), float(jerk_time))
     g = np.concatenate([np.zeros(2 * T), np.full(T, SLACK_COST * 1e-2)])
     solver = ca.conic("zmp_plan", "osqp", {"h": H.sparsity(), "a": A.sparsity()}, _osqp_options())
     lbx = np.concatenate([np.full(2 * T, -np.inf), np.zeros(T)])
