@@ -3,25 +3,19 @@
 The tracker's Levenberg-Marquardt takes about three iterations per frame, each a MuJoCo
 kinematics pass, eight site Jacobians, the CoM Jacobian and a Cholesky solve: ~9 us of MuJoCo and
 ~27 us of Python around it. Here the same loop (same steps, same MuJoCo functions, the same
-order of operations, so the same numbers) runs in C against MuJoCo's own library, the one the
-``mujoco`` package ships with its headers, on the tracker's ``MjModel``/``MjData``. Built on first
-use and cached like :mod:`~motion2robot.retarget.native` (the digest covers the source, the flags
-and the MuJoCo version); without a C compiler, or with ``MOTION2ROBOT_NATIVE=0``, the tracker
-runs its Python loop.
+order of operations, so the same numbers) runs in C on the tracker's ``MjModel``/``MjData``
+(:mod:`~motion2robot.util.mujoco_c`); where it cannot be built, the tracker runs its Python loop.
 """
 
 from __future__ import annotations
 
 import ctypes
 import functools
-import hashlib
-import os
-import shutil
-import subprocess
-from pathlib import Path
 
 import mujoco
 import numpy as np
+
+from motion2robot.util import mujoco_c
 
 SOURCE = r"""
 #include <math.h>
@@ -222,52 +216,14 @@ void m2r_track(const mjModel *m, mjData *d, int T, const int *ints, const int *l
 }
 """
 
-#: Extra compiler flags: no floating-point contraction (FMA), so the numbers are the Python loop's.
-FLAGS = ("-ffp-contract=off",)
-
-
-def _mujoco_dir() -> Path:
-    return Path(mujoco.__file__).parent
-
-
-def _mujoco_library() -> Path | None:
-    libs = sorted(_mujoco_dir().glob("libmujoco.so*")) + sorted(_mujoco_dir().glob("libmujoco*.dylib"))
-    return libs[0] if libs else None
-
-
 @functools.lru_cache(maxsize=1)
 def library() -> ctypes.CDLL | None:
-    """The compiled loop (built on first use, cached on disk), or None without a working C
-    compiler, without MuJoCo's headers and library in the ``mujoco`` package, or with
-    ``MOTION2ROBOT_NATIVE=0``."""
-    from motion2robot.retarget.compiled import _compile, cache_dir
-
-    mj_lib, include = _mujoco_library(), _mujoco_dir() / "include"
-    if (os.environ.get("MOTION2ROBOT_NATIVE", "1") == "0" or shutil.which(os.environ.get("CC", "gcc")) is None
-            or mj_lib is None or not (include / "mujoco" / "mujoco.h").is_file()):
-        return None
-    extra = (*FLAGS, f"-I{include}", str(mj_lib), f"-Wl,-rpath,{mj_lib.parent}")
-    digest = hashlib.sha256((SOURCE + " ".join(extra) + mujoco.__version__).encode()).hexdigest()[:20]
-    lib = cache_dir() / "native" / f"tracker-{digest}.so"
-    try:
-        if not lib.is_file():
-            lib.parent.mkdir(parents=True, exist_ok=True)
-            src = lib.with_name(f"tracker-{digest}.{os.getpid()}.c")
-            src.write_text(SOURCE)
-            try:
-                _compile(src, lib, extra)
-            finally:
-                src.unlink(missing_ok=True)
-        dll = ctypes.CDLL(str(lib))
-    except (OSError, subprocess.CalledProcessError):  # no usable compiler / unwritable cache: Python it is
-        return None
-    dll.m2r_track.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int] + [ctypes.c_void_p] * 17
-    dll.m2r_track.restype = None
+    """The compiled loop, or None where it cannot be built (:func:`~motion2robot.util.mujoco_c.load`)."""
+    dll = mujoco_c.load("tracker", SOURCE)
+    if dll is not None:
+        dll.m2r_track.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int] + [ctypes.c_void_p] * 17
+        dll.m2r_track.restype = None
     return dll
-
-
-def _addr(a: np.ndarray | None) -> int | None:
-    return None if a is None else a.ctypes.data
 
 
 def track(model: mujoco.MjModel, data: mujoco.MjData, ints: np.ndarray, legq: np.ndarray, cols: np.ndarray,
@@ -286,6 +242,6 @@ def track(model: mujoco.MjModel, data: mujoco.MjData, ints: np.ndarray, legq: np
     s = None if start is None else np.ascontiguousarray(start, dtype=np.float64)
     tg = np.ascontiguousarray(targets, dtype=np.float64)
     cm = np.ascontiguousarray(com_xy, dtype=np.float64)
-    dll.m2r_track(model._address, data._address, len(Q), *(_addr(a) for a in (ints, legq, cols, sites, *limits,
-                  weights, consts, J, q, s, tg, cm, out, err)))
+    dll.m2r_track(model._address, data._address, len(Q), *(mujoco_c.address(a) for a in (
+        ints, legq, cols, sites, *limits, weights, consts, J, q, s, tg, cm, out, err)))
     return out, err

@@ -18,6 +18,7 @@ import numpy as np
 
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
+from motion2robot.validate import kinematics_kernel
 from motion2robot.validate.models import check_model
 
 
@@ -134,6 +135,27 @@ def compute_kinematics(motion: RobotMotion, robot: Robot, *, collisions: bool = 
     xpos = np.empty((T, m.nbody, 3))
     xmat = np.empty((T, m.nbody, 9))
     rne = np.empty((T, m.nv))
+    native = kinematics_kernel.run(m, d, qpos, qvel, qacc, collisions, (site_xpos, xanchor, xaxis, subtree_com, xpos,
+                                                                       xmat, rne))
+    contacts = None if native is None else Contacts(native[0], native[1][:, 0].copy(), native[1][:, 1].copy(), native[2])
+    if contacts is None:
+        contacts = _frame_loop(m, d, qpos, qvel, qacc, collisions, site_xpos, xanchor, xaxis, subtree_com, xpos, xmat, rne)
+    corners = site_xpos[:, sole].reshape(T, 2, 4, 3)
+    corner_vel = np.gradient(corners, 1.0 / motion.fps, axis=0) if T > 1 else np.zeros_like(corners)
+    return Kinematics(
+        model=m, fps=float(motion.fps), qpos=qpos, qvel=qvel, qacc=qacc, corners=corners,
+        corner_vel=corner_vel, com=subtree_com[:, root], rne=rne, xanchor=xanchor[:, jids], xaxis=xaxis[:, jids],
+        root_xmat=xmat[:, root].reshape(T, 3, 3), torso_pos=xpos[:, torso], torso_up=xmat[:, torso][:, [2, 5, 8]],
+        contacts=contacts,
+    )
+
+
+def _frame_loop(m: mujoco.MjModel, d: mujoco.MjData, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray,
+                collisions: bool, site_xpos: np.ndarray, xanchor: np.ndarray, xaxis: np.ndarray,
+                subtree_com: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, rne: np.ndarray) -> Contacts:
+    """The per-frame pass in Python (without the compiled loop of :mod:`.kinematics_kernel`, the
+    same numbers): fills the (T, ...) arrays, returns the contacts."""
+    T = len(qpos)
     con_frames, con_geom, con_dist = [], [], []
     kin, com_pos, com_vel, rne_fn, collide = (
         mujoco.mj_kinematics, mujoco.mj_comPos, mujoco.mj_comVel, mujoco.mj_rne, mujoco.mj_collision)
@@ -161,18 +183,9 @@ def compute_kinematics(motion: RobotMotion, robot: Robot, *, collisions: bool = 
             con_frames.append(t)
             con_geom.append(con.geom.copy())
             con_dist.append(con.dist.copy())
-    corners = site_xpos[:, sole].reshape(T, 2, 4, 3)
-    corner_vel = np.gradient(corners, 1.0 / motion.fps, axis=0) if T > 1 else np.zeros_like(corners)
     if con_geom:
         counts = [len(x) for x in con_dist]
         geom = np.concatenate(con_geom).astype(np.int64)
-        contacts = Contacts(np.repeat(np.asarray(con_frames, dtype=np.int64), counts), geom[:, 0].copy(),
-                            geom[:, 1].copy(), np.concatenate(con_dist))
-    else:
-        contacts = Contacts(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
-    return Kinematics(
-        model=m, fps=float(motion.fps), qpos=qpos, qvel=qvel, qacc=qacc, corners=corners,
-        corner_vel=corner_vel, com=subtree_com[:, root], rne=rne, xanchor=xanchor[:, jids], xaxis=xaxis[:, jids],
-        root_xmat=xmat[:, root].reshape(T, 3, 3), torso_pos=xpos[:, torso], torso_up=xmat[:, torso][:, [2, 5, 8]],
-        contacts=contacts,
-    )
+        return Contacts(np.repeat(np.asarray(con_frames, dtype=np.int64), counts), geom[:, 0].copy(),
+                        geom[:, 1].copy(), np.concatenate(con_dist))
+    return Contacts(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
