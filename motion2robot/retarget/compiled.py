@@ -143,6 +143,29 @@ def _compile(src: Path, out: Path, extra: tuple[str, ...] = ()) -> None:
     tmp.replace(out)  # atomic: concurrent processes never load a half-written library
 
 
+def cached_library(name: str, source: str, extra: tuple[str, ...] = (), salt: str = "") -> ctypes.CDLL | None:
+    """The C ``source`` compiled (CFLAGS + ``extra``) into ``$MOTION2ROBOT_CACHE/native/<name>-<digest>.so``
+    on first use and loaded; the digest covers the source, the flags and ``salt`` (e.g. a library
+    version the code is built against). None without a C compiler, with ``MOTION2ROBOT_NATIVE=0``,
+    or when the build or the cache fails (the callers run their Python versions)."""
+    if os.environ.get("MOTION2ROBOT_NATIVE", "1") == "0" or _compiler() is None:
+        return None
+    digest = hashlib.sha256((source + " ".join(CFLAGS + extra) + salt).encode()).hexdigest()[:20]
+    lib = cache_dir() / "native" / f"{name}-{digest}.so"
+    try:
+        if not lib.is_file():
+            lib.parent.mkdir(parents=True, exist_ok=True)
+            src = lib.with_name(f"{name}-{digest}.{os.getpid()}.c")
+            src.write_text(source)
+            try:
+                _compile(src, lib, extra)
+            finally:
+                src.unlink(missing_ok=True)
+        return ctypes.CDLL(str(lib))
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
 def _lane_library(functions: dict[str, ca.Function],
                   shared: dict[str, tuple[int, ...]] = SHARED_INPUTS) -> tuple[Path, bool, float] | None:
     """Build (or find in the cache) the lane-code library of ``functions`` (``shared``: their

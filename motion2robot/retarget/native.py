@@ -13,11 +13,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import hashlib
-import os
-import shutil
-import subprocess
-from pathlib import Path
 
 import numpy as np
 
@@ -163,23 +158,10 @@ _DP = ctypes.POINTER(ctypes.c_double)
 def library() -> ctypes.CDLL | None:
     """The compiled kernels (built on first use, cached on disk), or None without a working C
     compiler (or with ``MOTION2ROBOT_NATIVE=0``)."""
-    from motion2robot.retarget.compiled import CFLAGS, _compile, cache_dir
+    from motion2robot.retarget.compiled import cached_library
 
-    if os.environ.get("MOTION2ROBOT_NATIVE", "1") == "0" or shutil.which(os.environ.get("CC", "gcc")) is None:
-        return None
-    digest = hashlib.sha256((SOURCE + " ".join(CFLAGS)).encode()).hexdigest()[:20]
-    lib = cache_dir() / "native" / f"{digest}.so"
-    try:
-        if not lib.is_file():
-            lib.parent.mkdir(parents=True, exist_ok=True)
-            src = lib.with_name(f"{digest}.{os.getpid()}.c")
-            src.write_text(SOURCE)
-            try:
-                _compile(Path(src), lib)
-            finally:
-                src.unlink(missing_ok=True)
-        dll = ctypes.CDLL(str(lib))
-    except (OSError, subprocess.CalledProcessError):  # no usable compiler / unwritable cache: numpy it is
+    dll = cached_library("kernels", SOURCE)
+    if dll is None:  # no usable compiler / unwritable cache: numpy it is
         return None
     dll.m2r_penta_solve.argtypes = [ctypes.c_int, ctypes.c_int] + [_DP] * 7
     dll.m2r_penta_solve.restype = None

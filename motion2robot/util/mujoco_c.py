@@ -13,10 +13,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import hashlib
-import os
-import shutil
-import subprocess
 from pathlib import Path
 
 import mujoco
@@ -38,28 +34,13 @@ def _library() -> Path | None:
 def load(name: str, source: str) -> ctypes.CDLL | None:
     """The kernel ``name`` compiled from C ``source`` (which includes ``<mujoco/mujoco.h>``),
     loaded; None when it cannot be built here (module text)."""
-    from motion2robot.retarget.compiled import _compile
-    from motion2robot.util.cache import cache_dir
+    from motion2robot.retarget.compiled import cached_library
 
     lib, include = _library(), _package() / "include"
-    if (os.environ.get("MOTION2ROBOT_NATIVE", "1") == "0" or shutil.which(os.environ.get("CC", "gcc")) is None
-            or lib is None or not (include / "mujoco" / "mujoco.h").is_file()):
+    if lib is None or not (include / "mujoco" / "mujoco.h").is_file():
         return None
-    extra = (*FLAGS, f"-I{include}", str(lib), f"-Wl,-rpath,{lib.parent}")
-    digest = hashlib.sha256((source + " ".join(extra) + mujoco.__version__).encode()).hexdigest()[:20]
-    out = cache_dir() / "native" / f"{name}-{digest}.so"
-    try:
-        if not out.is_file():
-            out.parent.mkdir(parents=True, exist_ok=True)
-            src = out.with_name(f"{name}-{digest}.{os.getpid()}.c")
-            src.write_text(source)
-            try:
-                _compile(src, out, extra)
-            finally:
-                src.unlink(missing_ok=True)
-        return ctypes.CDLL(str(out))
-    except (OSError, subprocess.CalledProcessError):  # no usable compiler / unwritable cache: Python it is
-        return None
+    return cached_library(name, source, (*FLAGS, f"-I{include}", str(lib), f"-Wl,-rpath,{lib.parent}"),
+                          salt=mujoco.__version__)
 
 
 def address(a) -> int | None:
