@@ -59,7 +59,7 @@ from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
 from motion2robot.retarget.smoothing import low_pass, smooth_hinges
 from motion2robot.retarget.solve_stages import free_limbs_clear, free_solve, pinned_solve
-from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, multibody_zmp
+from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, inside_planes, multibody_zmp
 from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
@@ -203,18 +203,24 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray, upper_body: np.
     out[:, 2] = root_height(tracker, out, corners, fps)
     plan_q = out.copy()
     figures = {"rounds": 0, "cart_table_slack_m": float(slack.max(initial=0.0))}
+    zmp = None  # the multi-body ZMP of ``out`` once measured
     for k in range(ZMP_ROUNDS):
         out, err = tracker.solve(plan_q, corners, target, fps, out if k else None)  # each round from the same plan
+        zmp = None
         figures["rounds"] = k + 1
         figures["tracking_error_m"] = float(err.max())
         if k == ZMP_ROUNDS - 1 or err.max() > LOST:
             break
         zmp, com = multibody_zmp(out, fps, robot)
+        if inside_planes(zmp, planes, support):  # the QP's answer would be no shift at all
+            break
         d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps, JERK_TIME)
         if np.abs(d).max() < MIN_SHIFT:
             break
         target = target + d
-    zmp, _ = multibody_zmp(out, fps, robot)
+        zmp = None
+    if zmp is None:
+        zmp, _ = multibody_zmp(out, fps, robot)
     ok = support & np.isfinite(zmp).all(axis=1)
     outside = np.maximum(0.0, -support_margin(np.nan_to_num(zmp[ok]), planes[ok]))
     figures["zmp_outside_shrunk_soles_m"] = float(outside.max(initial=0.0))

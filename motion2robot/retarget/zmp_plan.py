@@ -139,6 +139,17 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     return np.stack([x[:T], x[T:2 * T]], axis=1), np.maximum(x[2 * T:], 0.0)
 
 
+def inside_planes(zmp: np.ndarray, planes: np.ndarray, support: np.ndarray) -> bool:
+    """Whether the ZMP (T, 2) meets every constraint :func:`cart_table_shift` would put on it
+    (n . p <= b for each frame's non-padding planes (T, HMAX, 3) in the ``support`` (T,) frames
+    with a finite ZMP) as it is: then its smallest, smoothest shift is none."""
+    ok = support & np.isfinite(zmp).all(axis=1)
+    pl = planes[ok]
+    use = ~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0))
+    lhs = pl[..., 0] * zmp[ok, 0, None] + pl[..., 1] * zmp[ok, 1, None]
+    return bool(np.all(~use | (lhs <= pl[..., 2])))
+
+
 def com_boxes(target: np.ndarray, frames: np.ndarray, planes: np.ndarray, tol: float = TRACK_TOLERANCE) -> np.ndarray:
     """``planes`` (T, HMAX, 3) with the ``frames`` (T,) bool replaced by the box |c - target| <= tol."""
     out = planes.copy()
