@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from motion2robot.retarget import native
 from motion2robot.retarget.contacts import phases
 
 #: Directions (evenly spread) and lengths (m) tried for the push of an anchor.
@@ -38,7 +39,11 @@ def segment_distance(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray)
 
 def _push(seg: np.ndarray, other: np.ndarray, need: float) -> np.ndarray:
     """Shortest move (2,) of segment ``seg`` (2, 2) (over a grid of directions and lengths) after
-    which it is at least ``need`` from ``other`` (2, 2); the zero move when it already is."""
+    which it is at least ``need`` from ``other`` (2, 2); the zero move when it already is (the
+    C kernel of :mod:`~.native`, else numpy: the same numbers)."""
+    fast = native.push(seg, other, need, _MOVES)
+    if fast is not None:
+        return fast
     if segment_distance(seg[0], seg[1], other[0], other[1]) >= need:
         return np.zeros(2)
     for lo in range(0, len(STEPS), CHUNK):  # lengths in increasing chunks: pushes are mostly short

@@ -149,6 +149,48 @@ void m2r_tangent_diff(int T, int nq, const double *a, const double *b, double *d
         for (int i = 7; i < nq; ++i) o[i - 1] = x[i] - y[i];
     }
 }
+
+static double clip01(double x) { x = x >= 0.0 ? x : 0.0; return x <= 1.0 ? x : 1.0; }
+
+/* anchor_gap.segment_distance of the 2D segments pq and ab, the same operations in the same order. */
+static double segment_distance(const double *p, const double *q, const double *a, const double *b) {
+    double d1x = q[0] - p[0], d1y = q[1] - p[1], d2x = b[0] - a[0], d2y = b[1] - a[1];
+    double rx = p[0] - a[0], ry = p[1] - a[1];
+    double aa = (d1x * d1x + d1y * d1y) + 1e-12, ee = (d2x * d2x + d2y * d2y) + 1e-12, ff = d2x * rx + d2y * ry;
+    double c = d1x * rx + d1y * ry, bb = d1x * d2x + d1y * d2y;
+    double den = aa * ee - bb * bb;
+    den = den >= 1e-12 ? den : 1e-12;
+    double s = clip01((bb * ff - c * ee) / den);
+    double t = (bb * s + ff) / ee;
+    if (t < 0) s = clip01(-c / aa);
+    else if (t > 1) s = clip01((bb - c) / aa);
+    t = clip01(t);
+    double x = p[0] + s * d1x - a[0] - t * d2x, y = p[1] + s * d1y - a[1] - t * d2y;
+    return sqrt(x * x + y * y);
+}
+
+/* anchor_gap._push: the move (2) of segment seg (2, 2) from the grid moves (S, D, 2), the shortest
+   length first, then the direction with the largest gap, after which seg is `need` from other. */
+void m2r_push(const double *seg, const double *other, double need, int S, int D, const double *moves, double *out) {
+    out[0] = 0.0; out[1] = 0.0;
+    if (segment_distance(seg, seg + 2, other, other + 2) >= need) return;
+    for (int k = 0; k < S; ++k) {
+        int best = 0, ok = 0;
+        double top = 0.0;
+        for (int j = 0; j < D; ++j) {
+            const double *m = moves + 2 * (k * D + j);
+            double p[2] = {seg[0] + m[0], seg[1] + m[1]}, q[2] = {seg[2] + m[0], seg[3] + m[1]};
+            double g = segment_distance(p, q, other, other + 2);
+            if (j == 0 || g > top) { top = g; best = j; }
+            ok |= g >= need;
+        }
+        if (ok || k == S - 1) {
+            out[0] = moves[2 * (k * D + best)];
+            out[1] = moves[2 * (k * D + best) + 1];
+            return;
+        }
+    }
+}
 """
 
 _DP = ctypes.POINTER(ctypes.c_double)
@@ -169,6 +211,8 @@ def library() -> ctypes.CDLL | None:
     dll.m2r_smooth_irls.restype = None
     dll.m2r_clamp_velocity.argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP]
     dll.m2r_clamp_velocity.restype = None
+    dll.m2r_push.argtypes = [_DP, _DP, ctypes.c_double, ctypes.c_int, ctypes.c_int, _DP, _DP]
+    dll.m2r_push.restype = None
     for name in ("m2r_apply_step", "m2r_tangent_diff"):
         getattr(dll, name).argtypes = [ctypes.c_int, ctypes.c_int, _DP, _DP, _DP]
         getattr(dll, name).restype = None
@@ -240,3 +284,15 @@ def apply_step(qpos: np.ndarray, dx: np.ndarray) -> np.ndarray | None:
 def tangent_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     """C version of :func:`~motion2robot.retarget.problem.tangent_diff`, or None without the kernels."""
     return _pairwise("m2r_tangent_diff", a, b, a.shape[1] - 1)
+
+
+def push(seg: np.ndarray, other: np.ndarray, need: float, moves: np.ndarray) -> np.ndarray | None:
+    """C version of :func:`~motion2robot.retarget.anchor_gap._push` over the grid ``moves`` (S, D, 2),
+    or None without the kernels."""
+    dll = library()
+    if dll is None:
+        return None
+    a, b, m = (np.ascontiguousarray(x, dtype=np.float64) for x in (seg, other, moves))
+    out = np.zeros(2)
+    dll.m2r_push(_ptr(a), _ptr(b), float(need), m.shape[0], m.shape[1], _ptr(m), _ptr(out))
+    return out
