@@ -108,7 +108,8 @@ def _centre_yaw(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     xy = corners[..., :2]
     yaw = sole_yaw(corners)
     ok = np.isfinite(yaw)
-    yaw[ok] = np.unwrap(yaw[ok])
+    if np.count_nonzero(ok) > 1:  # (one sole: nothing to unwrap)
+        yaw[ok] = np.unwrap(yaw[ok])
     return xy.mean(axis=1), yaw
 
 
