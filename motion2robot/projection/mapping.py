@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import mujoco
 import numpy as np
 
 from motion2robot.errors import UserError
@@ -14,6 +13,7 @@ from motion2robot.motion.human import KP, SMPL22, HumanMotion
 from motion2robot.motion.ops import spline
 from motion2robot.projection.maths import fill_torso, robot_frames, unscale
 from motion2robot.retarget.scale import Scale
+from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -31,12 +31,9 @@ def robot_points(motion: RobotMotion, robot: Robot) -> tuple[np.ndarray, np.ndar
     mapped = np.zeros(len(SMPL22), dtype=bool)
     mapped[idx] = True
     pts = np.full((motion.num_frames, len(SMPL22), 3), np.nan)
-    up = np.empty((motion.num_frames, 3))
-    for t, q in enumerate(motion.qpos):
-        data.qpos[:] = q
-        mujoco.mj_kinematics(robot.model, data)
-        pts[t, idx] = data.site_xpos[robot.keypoint_sites]
-        up[t] = data.xmat[robot.torso_body].reshape(3, 3) @ up_local
+    poses = frame_poses(robot.model, motion.qpos, robot.keypoint_sites, [robot.torso_body])
+    pts[:, idx] = poses.sites
+    up = np.stack([R.reshape(3, 3) @ up_local for R in poses.xmat[:, 0]]) if motion.num_frames else np.empty((0, 3))
     return pts, mapped, up
 
 

@@ -14,6 +14,7 @@ import numpy as np
 from motion2robot.retarget import tracker_kernel
 from motion2robot.retarget.smoothing import low_pass
 from motion2robot.robot.chains import foot_ancestor_mask, hip_hinges
+from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 
 #: Hz, cutoff of the root height (its per-step dips go).
@@ -319,14 +320,8 @@ class LegTracker:
 
     def hips(self, Q: np.ndarray) -> np.ndarray:
         """(T, 2, 3) world positions (m) of each leg's first hinge (its hip) in the frames of Q."""
-        m, d, rb = self.model, self.data, self.robot
-        joints = [int(rb.joint_ids[j]) for j in self.first]
-        out = np.zeros((len(Q), 2, 3))
-        for t in range(len(Q)):
-            d.qpos[:] = Q[t]
-            mujoco.mj_kinematics(m, d)
-            out[t] = d.xanchor[joints]
-        return out
+        joints = [int(self.robot.joint_ids[j]) for j in self.first]
+        return frame_poses(self.model, Q, joints=joints).anchors
 
     def straight_reach(self) -> np.ndarray:
         """(2,) distance (m) from each leg's hip to its sole centre with the leg straight (its

@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from motion2robot.retarget.constraints import MARGIN_FRACTION, convex_hull, halfplanes
+from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -60,16 +61,8 @@ def acceptance(motion: RobotMotion, robot: Robot, collisions: bool = True) -> di
     limit_viol = int(np.sum(hinge < robot.lower - tol) + np.sum(hinge > robot.upper + tol))
     vel = np.abs(np.diff(hinge, axis=0)) * motion.fps
     speed_ratio = float((vel / robot.velocity_limit).max()) if T > 1 else 0.0
-    m = robot.model
-    d = mujoco.MjData(m)
-    corners = np.zeros((T, 2, 4, 3))
-    com = np.zeros((T, 3))
-    for t in range(T):
-        d.qpos[:] = q[t]
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        corners[t] = d.site_xpos[robot.sole_sites.ravel()].reshape(2, 4, 3)
-        com[t] = d.subtree_com[robot.root_body]
+    poses = frame_poses(robot.model, q, robot.sole_sites.ravel(), com_body=robot.root_body)
+    corners, com = poses.sites.reshape(T, 2, 4, 3), poses.com
     labels = np.asarray(motion.meta.get("contacts", np.zeros((T, 2))), dtype=bool)
     depth = float(max(0.0, -corners[..., 2].min()))
     centre = corners[..., :2].mean(axis=2)                      # (T, 2, 2)

@@ -24,11 +24,11 @@ from __future__ import annotations
 
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
+from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -40,19 +40,9 @@ FIELDS = ("keypoint_error_m", "keypoint_error_human_m", "keypoint_error_pose_m",
 def robot_points(motion: RobotMotion, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """World positions (m) per frame of the robot's keypoint sites (T, K, 3), in the order of
     ``robot.keypoints``, and of its sole corners (T, 2, 4, 3) [left, right]."""
-    m = robot.model
-    d = mujoco.MjData(m)
     kp_sites = np.asarray(robot.keypoint_sites)
-    sole = np.asarray(robot.sole_sites).ravel()
-    T = motion.num_frames
-    kp = np.empty((T, len(kp_sites), 3))
-    corners = np.empty((T, len(sole), 3))
-    for t, q in enumerate(motion.qpos):
-        d.qpos[:] = q
-        mujoco.mj_kinematics(m, d)
-        kp[t] = d.site_xpos[kp_sites]
-        corners[t] = d.site_xpos[sole]
-    return kp, corners.reshape(T, 2, 4, 3)
+    sites = frame_poses(robot.model, motion.qpos, np.r_[kp_sites, np.asarray(robot.sole_sites).ravel()]).sites
+    return sites[:, :len(kp_sites)], sites[:, len(kp_sites):].reshape(len(sites), 2, 4, 3)
 
 
 def robot_contacts(corners: np.ndarray, fps: float, height: float, speed: float) -> np.ndarray:

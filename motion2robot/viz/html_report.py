@@ -11,11 +11,11 @@ import io
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-import mujoco
 import numpy as np
 
 from motion2robot.errors import UserError
 from motion2robot.motion.human import HumanMotion
+from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 from motion2robot.util.ranges import frame_ranges
@@ -62,13 +62,8 @@ def _fmt(v: Any) -> str:
 
 def sole_corners_xy(motion: RobotMotion, robot: Robot) -> np.ndarray:
     """(T, 2, 4, 2) ground projection (m) of the sole corners [left, right] per frame."""
-    data = mujoco.MjData(robot.model)
-    out = np.empty((motion.num_frames, 2, 4, 2))
-    for f in range(motion.num_frames):
-        data.qpos[:] = motion.qpos[f]
-        mujoco.mj_kinematics(robot.model, data)
-        out[f] = data.site_xpos[robot.sole_sites][..., :2]
-    return out
+    sites = frame_poses(robot.model, motion.qpos, np.asarray(robot.sole_sites).ravel()).sites
+    return sites.reshape(motion.num_frames, 2, 4, 3)[..., :2].copy()
 
 
 def report_plots(report: Any, motion: RobotMotion, robot: Robot) -> list[tuple[str, bytes]]:
