@@ -145,8 +145,9 @@ static void step(Tracker *k, const double *q, const double *dx) {
   }
 }
 
-/* LegTracker.solve's frame loop: out (T, nq) holds Q on entry and the solution on return; err (T). */
-void m2r_track(const mjModel *m, mjData *d, int T, const int *ints, const int *legq, const int *cols,
+/* LegTracker.solve's frame loop: out (T, nq) holds Q on entry and the solution on return; err (T).
+   Returns 0, or -1 when its work memory cannot be allocated (nothing done). */
+int m2r_track(const mjModel *m, mjData *d, int T, const int *ints, const int *legq, const int *cols,
                const int *sites, const double *lo, const double *hi, const double *lo_zone, const double *hi_zone,
                const double *w, const double *c, double *J, const double *Q, const double *start,
                const double *targets, const double *com_xy, double *out, double *err) {
@@ -159,7 +160,9 @@ void m2r_track(const mjModel *m, mjData *d, int T, const int *ints, const int *l
   k.jac = buf;
   double *r = k.jac + 27 * k.nv, *r_new = r + k.rows, *H = r_new + k.rows, *L = H + nc * nc;
   double *g = L + nc * nc, *dx = g + nc, *rhs = dx + nc, *q = rhs + nc;
-  unsigned char *held = calloc(nc + 2 * n + 1, 1), *at_lo = held + nc, *at_hi = at_lo + n;
+  unsigned char *held = calloc(nc + 2 * n + 1, 1);
+  if (!buf || !held) { free(buf); free(held); return -1; }
+  unsigned char *at_lo = held + nc, *at_hi = at_lo + n;
   for (int t = 0; t < T; ++t) {
     const double *prev = t ? out + (t - 1) * nq : NULL;
     memcpy(q, Q + t * nq, sizeof(double) * nq);
@@ -213,6 +216,7 @@ void m2r_track(const mjModel *m, mjData *d, int T, const int *ints, const int *l
   }
   free(buf);
   free(held);
+  return 0;
 }
 """
 
@@ -222,7 +226,7 @@ def library() -> ctypes.CDLL | None:
     dll = mujoco_c.load("tracker", SOURCE)
     if dll is not None:
         dll.m2r_track.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int] + [ctypes.c_void_p] * 17
-        dll.m2r_track.restype = None
+        dll.m2r_track.restype = ctypes.c_int
     return dll
 
 
@@ -232,7 +236,7 @@ def track(model: mujoco.MjModel, data: mujoco.MjData, ints: np.ndarray, legq: np
           com_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The frame loop of ``LegTracker.solve`` in C (the arguments as it lays them out: int32
     and float64 C-contiguous arrays; ``limits`` = (lo, hi, lo_zone, hi_zone)); returns (out,
-    err), or None when the library is not available."""
+    err), or None when the library is not available or its work memory cannot be allocated."""
     dll = library()
     if dll is None:
         return None
@@ -242,6 +246,6 @@ def track(model: mujoco.MjModel, data: mujoco.MjData, ints: np.ndarray, legq: np
     s = None if start is None else np.ascontiguousarray(start, dtype=np.float64)
     tg = np.ascontiguousarray(targets, dtype=np.float64)
     cm = np.ascontiguousarray(com_xy, dtype=np.float64)
-    dll.m2r_track(model._address, data._address, len(Q), *(mujoco_c.address(a) for a in (
+    status = dll.m2r_track(model._address, data._address, len(Q), *(mujoco_c.address(a) for a in (
         ints, legq, cols, sites, *limits, weights, consts, J, q, s, tg, cm, out, err)))
-    return out, err
+    return (out, err) if status == 0 else None
