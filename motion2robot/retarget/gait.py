@@ -218,8 +218,7 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray, upper_body: np.
         if np.abs(d).max() < MIN_SHIFT:
             break
         target = target + d
-        zmp = None
-    if zmp is None:
+    if zmp is None:  # the last round's ZMP was not measured
         zmp, _ = multibody_zmp(out, fps, robot)
     ok = support & np.isfinite(zmp).all(axis=1)
     outside = np.maximum(0.0, -support_margin(np.nan_to_num(zmp[ok]), planes[ok]))

@@ -103,22 +103,15 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     charged): with it the CoM's acceleration, and so the ZMP, changes smoothly where the support
     polygon changes instead of jumping in one frame."""
     T = len(zmp)
-    ok = support & np.isfinite(zmp).all(axis=1)
-    if T < 3 or not ok.any():
+    frames, fi, n_x, n_y, rhs = _constraints(zmp, planes, support)
+    k = len(fi)
+    if T < 3 or not k:
         return np.zeros((T, 2)), np.zeros(T)
     # M = I - (z_c / g) fps^2 D2: the ZMP change per axis is M d; row t holds (t, 1) then its three
     # D2 entries (t-1, t, t+1, ends replicated), in this order
-    frames = np.flatnonzero(ok)
     a = -(com_z[frames] / GRAVITY) * fps ** 2
     m_col = np.stack([frames, np.maximum(frames - 1, 0), frames, np.minimum(frames + 1, T - 1)], axis=1)
     m_val = np.stack([np.ones(len(frames)), a * 1.0, a * -2.0, a * 1.0], axis=1)
-    pl = planes[frames]  # (F, HMAX, 3) rows n . p <= b; all-zero normals are padding
-    use = ~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0))
-    fi, hi = np.nonzero(use)  # one constraint per (frame, plane), frame-major as the frames go
-    k = len(fi)
-    if not k:
-        return np.zeros((T, 2)), np.zeros(T)
-    n_x, n_y, b = pl[fi, hi, 0], pl[fi, hi, 1], pl[fi, hi, 2]
     kk = np.arange(k)
     c, v = m_col[fi], m_val[fi]  # (k, 4)
     # per constraint: (x column, y column) for each of the 4 entries, then its slack
@@ -126,7 +119,6 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     cc = np.concatenate([np.stack([c, T + c], axis=2).reshape(k, 8), (2 * T + frames[fi])[:, None]], axis=1).ravel()
     vv = np.concatenate([np.stack([n_x[:, None] * v, n_y[:, None] * v], axis=2).reshape(k, 8),
                          np.full((k, 1), -1.0)], axis=1).ravel()
-    rhs = b - n_x * zmp[frames[fi], 0] - n_y * zmp[frames[fi], 1]
     A = _sparse(rr, cc, vv, k, 3 * T)
     H = _hessian(T, float(fps), float(jerk_time))
     g = np.concatenate([np.zeros(2 * T), np.full(T, SLACK_COST * 1e-2)])
@@ -139,15 +131,23 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     return np.stack([x[:T], x[T:2 * T]], axis=1), np.maximum(x[2 * T:], 0.0)
 
 
+def _constraints(zmp: np.ndarray, planes: np.ndarray,
+                 support: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rows of :func:`cart_table_shift`'s constraints: the constrained frames (F,) (``support``
+    with a finite ZMP), then per (frame, plane) row, frame-major, the index into those frames (k,),
+    the plane's normal (k,) x and y, and its room b - n . zmp (k,) (``planes`` (T, HMAX, 3) rows
+    n . p <= b; all-zero normals are padding)."""
+    frames = np.flatnonzero(support & np.isfinite(zmp).all(axis=1))
+    pl = planes[frames]
+    fi, hi = np.nonzero(~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0)))
+    n_x, n_y, b = pl[fi, hi, 0], pl[fi, hi, 1], pl[fi, hi, 2]
+    return frames, fi, n_x, n_y, b - n_x * zmp[frames[fi], 0] - n_y * zmp[frames[fi], 1]
+
+
 def inside_planes(zmp: np.ndarray, planes: np.ndarray, support: np.ndarray) -> bool:
-    """Whether the ZMP (T, 2) meets every constraint :func:`cart_table_shift` would put on it
-    (n . p <= b for each frame's non-padding planes (T, HMAX, 3) in the ``support`` (T,) frames
-    with a finite ZMP) as it is: then its smallest, smoothest shift is none."""
-    ok = support & np.isfinite(zmp).all(axis=1)
-    pl = planes[ok]
-    use = ~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0))
-    lhs = pl[..., 0] * zmp[ok, 0, None] + pl[..., 1] * zmp[ok, 1, None]
-    return bool(np.all(~use | (lhs <= pl[..., 2])))
+    """Whether the ZMP (T, 2) meets every constraint :func:`cart_table_shift` would put on it as
+    it is (no shift: every row's room is >= 0): then its smallest, smoothest shift is none."""
+    return bool(np.all(_constraints(zmp, planes, support)[4] >= 0.0))
 
 
 def com_boxes(target: np.ndarray, frames: np.ndarray, planes: np.ndarray, tol: float = TRACK_TOLERANCE) -> np.ndarray:
