@@ -8,8 +8,12 @@ it turns, the torso's heading, the arms and head) and regenerates the legs as a 
 smooth by construction (after Nakaoka et al., IJRR 2007: leg motion regenerated for the robot,
 then a ZMP-based waist trajectory):
 
-1. the whole-body pipeline's first stages: the free solve (where the human's feet go, and the
-   upper body tracking the human) and the pinned solve (the pelvis height with the feet down);
+1. the whole-body pipeline's first stage, the free solve: where the human's feet go, the pelvis
+   height with the feet on the floor, and the upper body tracking the human (the pinned solve of
+   the whole-body pipeline is not run: pinning the soles at the human's placements, which the
+   footholds below re-lay anyway, dragged the root of a sliding MDM thrower to 0.1 m below
+   the floor, and its low-passed dips set a crouch that differed by 3-4 cm between 20 and 100
+   fps);
 2. footholds (:mod:`~.footholds`): a double support before every lift-off (runs and jumps are
    walked; a human walk's heel-up frames leave none), the human's placements re-laid step by step, each step
    shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
@@ -19,7 +23,7 @@ then a ZMP-based waist trajectory):
    schedule made on the clip's own frames at any output rate (:func:`native_walking_labels`);
    the contact plan's swings go straight between them, lifted
    (:mod:`~.footsteps`); a foot in the air at either end of the clip stands at its nearest placement;
-3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the pinned
+3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the free
    solve's low-passed and kept below what the legs reach (:func:`~.leg_tracker.root_height`);
    the hinges of the upper body and head: the free solve's, smoothed within the servos' limits
    (the pinned solve's upper body also answers for the human's full stride and static balance,
@@ -58,7 +62,7 @@ from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
 from motion2robot.retarget.smoothing import low_pass, smooth_hinges
-from motion2robot.retarget.solve_stages import free_limbs_clear, free_solve, pinned_solve
+from motion2robot.retarget.solve_stages import free_limbs_clear, free_solve
 from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, inside_planes, multibody_zmp
 from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
@@ -113,9 +117,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
-    upper_body = Q.copy()
     free_corners = setup.points(Q)[1]
-    Q, pinned = pinned_solve(setup, plan_contacts(setup, free_corners), Q)
     tracker = LegTracker(robot)
     longest = STEP_REACH * float(tracker.straight_reach().min())
     k = step_factor(anchor_soles(free_corners, setup.labels), setup.labels, longest)
@@ -125,7 +127,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
                          place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN, turn_rate),
                          swing_shape=SWING_SHAPE)
-    Q, walked, figures = walk_pattern(setup, plan, Q, upper_body, tracker)
+    Q, walked, figures = walk_pattern(setup, plan, Q, tracker)
     # the free solve's arms kept clear of the human's legs, not of the regenerated ones
     Q = free_limbs_clear(setup, walked.params(setup), Q)
     Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
@@ -135,7 +137,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     human_path = np.linalg.norm(np.diff(setup.kp[:, 0, :2], axis=0), axis=1).sum()
     figures.update(step_factor=k, longest_step_m=longest, stance_width_m=width, path_m=float(path),
                    human_path_m=float(human_path))
-    stages = StageFigures(free, pinned, 0, None, None, solve_s, time.perf_counter() - t_all)
+    stages = StageFigures(free, None, 0, None, None, solve_s, time.perf_counter() - t_all)
     # the keypoint error is the posture's: the human moved along the robot's (shortened) path, as
     # the stance's is against the human held in place; the path itself is reported apart
     along = setup.kp.copy()
@@ -169,10 +171,10 @@ def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
     return low_pass(((yaw[:, 0] + right) / 2)[:, None], fps, ROOT_CUTOFF_HZ)[:, 0]
 
 
-def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray, upper_body: np.ndarray,
+def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray,
                  tracker: LegTracker) -> tuple[np.ndarray, ContactPlan, dict]:
-    """Stages 3-6 of the module text on the pinned solve ``Q``, the free solve ``upper_body``
-    (whose upper-body and head hinges are kept) and the re-laid contact ``plan``, solved by
+    """Stages 3-6 of the module text on the free solve ``Q`` (whose root height, CoM height and
+    upper-body and head hinges are kept) and the re-laid contact ``plan``, solved by
     ``tracker`` (the robot's): the trajectory, the plan it stands on (every foot planned in every
     frame) and figures."""
     robot, fps = setup.robot, setup.fps
@@ -187,19 +189,19 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray, upper_body: np.
         # the solve's per-frame noise filtered as the whole-body pipeline's last stage does
         # (the same cutoff in Hz at any rate), then rounded off to what the servos can follow
         lo, hi = robot.lower[upper], robot.upper[upper]
-        out[:, 7 + upper] = smooth_hinges(low_pass(upper_body[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
+        out[:, 7 + upper] = smooth_hinges(low_pass(Q[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
                                           setup.servo[1][upper], fps, robot.velocity_limit[upper], lo, hi)
     # the CoM plan: near the feet's midpoint, its cart-table ZMP inside every frame's support polygon
-    com_pinned = setup.points(Q)[2]
+    com_free = setup.points(Q)[2]
     com_ref = low_pass(corners[..., :2].mean(axis=(1, 2)), fps, COM_CUTOFF_HZ)   # between the feet
-    com_z = low_pass(com_pinned[:, 2:3] - Q[:, 2:3] + out[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
+    com_z = low_pass(com_free[:, 2:3] - Q[:, 2:3] + out[:, 2:3], fps, ROOT_CUTOFF_HZ)[:, 0]
     acc = np.gradient(np.gradient(com_ref, axis=0), axis=0) * fps ** 2
     zmp0 = com_ref - (com_z / GRAVITY)[:, None] * acc   # the reference path's own cart-table ZMP
     shift, slack = cart_table_shift(zmp0, com_z, planes, support, fps, JERK_TIME)
     target = com_ref + shift
-    # the root starts where the CoM plan puts it (the pinned solve's own root follows the human's
+    # the root starts where the CoM plan puts it (the free solve's own root follows the human's
     # stride, not the shortened one), and its height comes down to what the legs reach from there
-    out[:, :2] = target + np.median(Q[:, :2] - com_pinned[:, :2], axis=0)
+    out[:, :2] = target + np.median(Q[:, :2] - com_free[:, :2], axis=0)
     out[:, 2] = root_height(tracker, out, corners, fps)
     plan_q = out.copy()
     figures = {"rounds": 0, "cart_table_slack_m": float(slack.max(initial=0.0))}

@@ -47,11 +47,12 @@ def residuals(setup: Setup, pts: tuple[np.ndarray, ...], labels: np.ndarray, sol
 
 @dataclass(frozen=True)
 class StageFigures:
-    """What the stages report: solver stats of stages 1 and 2, correction rounds, the dynamic
-    balance and root pass figures (None when not run), times (s)."""
+    """What the stages report: solver stats of stages 1 and 2 (``pinned`` None when the pipeline
+    has no pinned solve, as ``steps``), correction rounds, the dynamic balance and root pass
+    figures (None when not run), times (s)."""
 
     free: object
-    pinned: object
+    pinned: object | None
     rounds: int
     dynamic_balance: dict | None
     root_pass: dict | None
@@ -84,7 +85,7 @@ def robot_motion(setup: Setup, plan: ContactPlan, Q: np.ndarray, pts: tuple[np.n
                        else "per-frame IPOPT (casadi nlpsol)"),
             "time_s": solve_s, "total_s": stages.total_s, "frames_per_s": T / solve_s if solve_s > 0 else None,
             "compile_s": problem.compile_s, "build_s": problem.build_s, "compiled_from_cache": problem.cached,
-            "iterations": [stages.free.iterations, stages.pinned.iterations], "correction_rounds": stages.rounds,
+            "iterations": [stages.free.iterations, stages.pinned.iterations if stages.pinned is not None else 0], "correction_rounds": stages.rounds,
             **figures,
             "objective": {"total": float(terms.sum() + temporal.sum()), "temporal": float(temporal.sum()),
                           **dict(zip(FRAME_TERMS, terms.sum(axis=0).tolist()))},
