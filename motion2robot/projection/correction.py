@@ -3,7 +3,7 @@ retargeting is the robot motion it was made from."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -83,21 +83,26 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
 
 def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[HumanMotion], RobotMotion]:
     """The retargeting that made ``motion``, as one function of the human motion: its tempo factor
-    and the whole-body pipeline (a ``stance`` result's human' already stands in the stance, and
-    whole body is what the legs policy tries first), no judging."""
+    and its legs, no judging: a ``steps`` result's by the ``steps`` pattern (corrected against the
+    whole body instead, whose feet ``human'`` cannot steer onto the pattern's footholds, the
+    rounds of the Bandai walk stalled at 0.068 rad), the others by the whole-body pipeline (a
+    ``stance`` result's human' already stands in the stance, and whole body is what the legs
+    policy tries first)."""
     from dataclasses import replace
 
     from motion2robot.motion.ops import resample
-    from motion2robot.retarget.api import RetargetOptions, whole_body
+    from motion2robot.retarget.api import RetargetOptions, solve_legs
     from motion2robot.retarget.tempo import stretch
 
     opt = options or RetargetOptions()
     inner = replace(opt, fps=None)
     k = float(motion.meta.get("tempo") or 1.0)
+    fallback = motion.meta.get("fallback")
+    legs = "steps" if isinstance(fallback, Mapping) and fallback.get("mode") == "steps" else "whole"
 
     def solve(h: HumanMotion) -> RobotMotion:
         if opt.fps is not None and abs(opt.fps - h.fps) > 1e-9:
             h = resample(h, opt.fps)
-        return whole_body(stretch(h, k), robot, inner)
+        return solve_legs(stretch(h, k), robot, inner, legs)
 
     return solve
