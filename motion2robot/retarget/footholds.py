@@ -140,12 +140,12 @@ def stance_width(robot: Robot) -> float:
     return float(max(np.linalg.norm(hips[0][:2] - hips[1][:2]), soles))
 
 
-def widen_swings(labels: np.ndarray, min_frames: int) -> np.ndarray:
+def widen_swings(labels: np.ndarray, min_frames: int, keep: int = 1) -> np.ndarray:
     """(T, 2) contact labels in which every swing (a foot in the air between two of its contact
     phases) lasts at least ``min_frames``: a shorter one lifts off earlier and sets down later by
     about the same number of frames, taken from the foot's own contact phases where the other
-    foot is down (it carries the body meanwhile) and leaving each phase at least one frame; a
-    swing with no room keeps what it can get."""
+    foot is down (it carries the body meanwhile) and leaving each phase at least ``keep`` frames
+    (a phase already that short gives nothing); a swing with no room keeps what it can get."""
     out = labels.copy()
     T = len(out)
     for f in range(out.shape[1]):
@@ -154,10 +154,10 @@ def widen_swings(labels: np.ndarray, min_frames: int) -> np.ndarray:
             if a == 0 or b >= T or b - a >= min_frames:
                 continue
             before = 0  # frames of this foot's phase before the swing that can join it
-            while a - before - 2 >= 0 and out[a - before - 2, f] and other[a - before - 1]:
+            while a - before - 1 - keep >= 0 and out[a - before - 1 - keep:a - before - 1, f].all() and other[a - before - 1]:
                 before += 1
             after = 0
-            while b + after + 1 < T and out[b + after + 1, f] and other[b + after]:
+            while b + after + keep < T and out[b + after + 1:b + after + 1 + keep, f].all() and other[b + after]:
                 after += 1
             need = min_frames - (b - a)
             late = min(after, need - min(before, need // 2))
@@ -167,17 +167,21 @@ def widen_swings(labels: np.ndarray, min_frames: int) -> np.ndarray:
     return out
 
 
-def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float) -> np.ndarray:
+def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float,
+             keep_swing_s: float = 0.0) -> np.ndarray:
     """(T, 2) contact labels in which a foot lifts off only after the other has been down for
     ``overlap_s``: a phase whose foot would lift with the other foot in the air (a run's flight, a
     jump) or just landed (a human walk's heel-up frames leave no double support) is extended until
     the other foot has landed and ``overlap_s`` more, as long as ``min_swing_s`` of its next swing
     is left (the ZMP then moves across a double support instead of jumping between the soles);
     where that leaves no room before the other foot lands (a hop, a jump with both feet), the
-    foot stays down through to its next contact (the hop is dropped)."""
+    foot stays down through to its next contact (the hop is dropped). A swing is shortened below
+    ``keep_swing_s`` (or its own length if shorter) only where the other foot is in the air
+    (that double support is not waited for, not the swing)."""
     out = labels.copy()
     T = len(out)
     overlap, min_swing = max(1, int(round(overlap_s * fps))), max(1, int(round(min_swing_s * fps)))
+    keep_swing = int(round(keep_swing_s * fps))
     for g, a, e in sorted(phases(labels), key=lambda r: r[2]):
         if e >= T:
             continue
@@ -193,6 +197,8 @@ def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: floa
                 continue
             landing = e + int(down[0])
         stop = min(landing + overlap, cap)
+        if len(nxt) and keep_swing > min_swing and stop > landing:  # the double support gives way
+            stop = max(landing + 1, min(stop, e + int(nxt[0]) - max(min_swing, min(keep_swing, int(nxt[0])))))
         if stop <= landing and len(nxt):  # no room to wait for the other foot (a hop): no swing
             stop = e + int(nxt[0])
         if stop > e:
@@ -200,17 +206,25 @@ def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: floa
     return out
 
 
-def walking_labels(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float) -> np.ndarray:
+def walking_labels(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: float,
+                   long_swing_s: float = 0.0) -> np.ndarray:
     """(T, 2) contact labels of a walking pattern from the human's (at ``fps``): every swing
-    widened to ``min_swing_s`` (:func:`widen_swings`), every lift-off after a double support of
-    ``overlap_s`` (:func:`grounded`), then both again: a swing beside a flight phase has no room
-    (the other foot is in the air) until the flight is grounded (a GMD clip at 100 fps kept a
-    0.05 s swing there: 600 rad/s^2 in a knee), and widening it can take the double support
-    before the other foot's lift-off, which the second grounding gives back."""
+    widened to ``min_swing_s`` (:func:`widen_swings`), then to ``long_swing_s`` where the foot's
+    contact phases around it keep ``overlap_s`` (quick footwork keeps its short stances), every
+    lift-off after a double support of ``overlap_s`` (:func:`grounded`), then all again: a swing
+    beside a flight phase has no room (the other foot is in the air) until the flight is grounded
+    (a GMD clip at 100 fps kept a 0.05 s swing there: 600 rad/s^2 in a knee), and widening it can
+    take the double support before the other foot's lift-off, which the second grounding gives
+    back."""
     n_swing = int(np.ceil(min_swing_s * fps - 1e-9))
+    n_long = int(np.ceil(long_swing_s * fps - 1e-9))
+    keep = max(1, int(round(overlap_s * fps)))
     out = labels
     for _ in range(2):
-        out = grounded(widen_swings(out, n_swing), fps, overlap_s, min_swing_s)
+        out = widen_swings(out, n_swing)
+        if n_long > n_swing:
+            out = widen_swings(out, n_long, keep)
+        out = grounded(out, fps, overlap_s, min_swing_s, long_swing_s)
     return out
 
 

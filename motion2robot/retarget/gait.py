@@ -19,8 +19,10 @@ then a ZMP-based waist trajectory):
    shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
    at the robot's own stance width, each foot turning no faster than TURN_SPEED of its hip's
    velocity limit allows over its swing; a foot stepping twice in a row laid from the one it
-   stands beside; every swing at least MIN_SWING_FRAMES of the clip's own rate, the whole
-   schedule made on the clip's own frames at any output rate (:func:`native_walking_labels`);
+   stands beside; every swing at least MIN_SWING_FRAMES of the clip's own rate, and
+   LONG_SWING_FRAMES where the foot's stances keep OVERLAP_S (the double support before the
+   lift-off then shrinks rather than the swing), the whole schedule made on the clip's own frames
+   at any output rate (:func:`native_walking_labels`);
    the contact plan's swings go straight between them, lifted
    (:mod:`~.footsteps`); a foot in the air at either end of the clip stands at its nearest placement;
 3. the root: upright, facing where the feet do (:func:`feet_heading`), its height the free
@@ -91,6 +93,10 @@ MIN_SWING_S = 0.2
 #: fewer frames is a polygon of a few points to the servos, whose peaks a finer rate shows
 #: (:func:`~.footholds.widen_swings` lengthens it into the double supports around it).
 MIN_SWING_FRAMES = 8
+#: The swing sought in frames of the clip's own rate where the foot's contact phases around it
+#: keep a double support of OVERLAP_S (a 20 fps clip: 0.6 s): a 0.4 s swing's peaks fall between
+#: 20 fps frames, and a 100 fps resampling showed them 1.5-1.7x taller on 12 clips.
+LONG_SWING_FRAMES = 12
 #: (lead, ramp) of the swings (:func:`~.footsteps.swing_path`): the foot rises over the first half
 #: and sets down over the second (the whole-body plan's 0.3 lifts within 0.12 s of a 0.4 s swing,
 #: a peak a 20 fps clip cannot show but a 100 fps one does), moving horizontally from a fifth in,
@@ -114,7 +120,7 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
     native = float(human.meta.get("resampled_from_fps") or human.fps)
     min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
-    setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing))
+    setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing, LONG_SWING_FRAMES / native))
     t_solve = time.perf_counter()
     Q, free = free_solve(setup)
     free_corners = setup.points(Q)[1]
@@ -147,7 +153,8 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
                               "solver": {**motion.meta["solver"], "steps": figures}})
 
 
-def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_swing: float) -> np.ndarray:
+def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_swing: float,
+                          long_swing: float = 0.0) -> np.ndarray:
     """(T, 2) walking labels (:func:`~.footholds.walking_labels`) of ``human`` at its output rate,
     scheduled at the clip's ``native`` rate: a clip resampled finer (``--fps``) has its contacts
     detected and its swings widened and grounded on the native frames, then each output frame
@@ -155,9 +162,9 @@ def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_s
     at 100 fps, a 20 fps GMD clip's contacts flickered into a 0.05 s hop beside a flight, and a
     60 fps CMU dance's into 0.04 s swings: 3-5x the native peaks)."""
     if not setup.opt.contacts or abs(native - setup.fps) < 1e-9:
-        return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing)
+        return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing, long_swing)
     coarse = resample(human, native)
-    labels = walking_labels(planted(contact_labels(coarse)[0], coarse), native, OVERLAP_S, min_swing)
+    labels = walking_labels(planted(contact_labels(coarse)[0], coarse), native, OVERLAP_S, min_swing, long_swing)
     nearest = np.rint(np.arange(len(setup.labels)) * native / setup.fps).astype(int)
     return labels[np.clip(nearest, 0, len(labels) - 1)]
 
