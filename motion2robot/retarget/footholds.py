@@ -175,9 +175,9 @@ def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: floa
     the other foot has landed and ``overlap_s`` more, as long as ``min_swing_s`` of its next swing
     is left (the ZMP then moves across a double support instead of jumping between the soles);
     where that leaves no room before the other foot lands (a hop, a jump with both feet), the
-    foot stays down through to its next contact (the hop is dropped). A swing is shortened below
-    ``keep_swing_s`` (or its own length if shorter) only where the other foot is in the air
-    (that double support is not waited for, not the swing)."""
+    foot stays down through to its next contact (the hop is dropped). With ``keep_swing_s``, the
+    wait stops where it would cut the next swing below ``keep_swing_s`` (or below its own length,
+    if shorter): the double support gets shorter instead, down to a frame after the landing."""
     out = labels.copy()
     T = len(out)
     overlap, min_swing = max(1, int(round(overlap_s * fps))), max(1, int(round(min_swing_s * fps)))
@@ -198,7 +198,9 @@ def grounded(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s: floa
             landing = e + int(down[0])
         stop = min(landing + overlap, cap)
         if len(nxt) and keep_swing > min_swing and stop > landing:  # the double support gives way
-            stop = max(landing + 1, min(stop, e + int(nxt[0]) - max(min_swing, min(keep_swing, int(nxt[0])))))
+            swing = int(nxt[0])
+            keep_cap = e + swing - max(min_swing, min(keep_swing, swing))
+            stop = max(landing + 1, min(stop, keep_cap))
         if stop <= landing and len(nxt):  # no room to wait for the other foot (a hop): no swing
             stop = e + int(nxt[0])
         if stop > e:
