@@ -18,9 +18,7 @@ attempt that passes, in this order:
    ``stance`` (:mod:`~.stance`: legs in a fixed stance, upper body and head perform). A clip whose
    pelvis travels (more than TRAVEL_M from where it starts) tries ``steps`` first: walking is the
    nearest thing to it; one that stays in place tries ``stance`` first, which keeps its tempo more
-   often; one whose ``steps`` would step in place (the steps kept below :data:`GLIDE_SHARE` of the
-   human's: a glide, as generated throwers skate) tries the stance before keeping them (at the
-   same tempo when the steps pass). ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
+   often. ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
    the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
    them with a foot always on the floor.
 
@@ -55,13 +53,6 @@ AUTO_LEGS = LEG_MODES
 #: m (human): a pelvis that goes farther than this from where it starts travels (a walk, not a
 #: motion in place).
 TRAVEL_M = 0.5
-
-#: A ``steps`` attempt whose steps keep less than this share of the human's length (its step
-#: factor) steps in place: the human's steps are then over 1.8 leg lengths at the robot's scale,
-#: beyond a running stride (the dev clips' walks, runs and dances keep 14-63 %; MDM throwers whose
-#: pelvis glides 3-5 m keep 4-8 %): glides, not steps, and the stance, nearer to them (about half
-#: the keypoint error on those throwers), is tried before ``steps`` is kept.
-GLIDE_SHARE = 0.1
 
 _MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
 
@@ -167,16 +158,6 @@ def auto_legs(human: HumanMotion, labels: np.ndarray, flight: bool) -> list[str]
     return [m for m in ([] if flight else ["whole"]) + order if m != "steps" or steps]
 
 
-def _glides(first: Attempt) -> str | None:
-    """Why ``first`` (the ``steps`` attempt at the first tempo) steps in place, or None: its steps
-    keep less than GLIDE_SHARE of the human's length."""
-    share = float(((first.motion.meta.get("solver") or {}).get("steps") or {}).get("step_factor", 1.0))
-    if share >= GLIDE_SHARE:
-        return None
-    return (f"the human's steps would keep {100 * share:.0f} % of their length (the robot stepping in place): "
-            "they glide rather than step, and the stance is nearer")
-
-
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
               skipped: list[dict]) -> dict | None:
     """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
@@ -189,12 +170,9 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                "cannot produce" + ("; its steps are walked with a foot always on the floor" if final.legs == "steps"
                                    else ""))
     else:
-        noted = {s["legs"] for s in skipped}
-        why = "; ".join([f"{_MODE_WORDS[s['legs']]} {'set aside' if s.get('set_aside') else 'not tried'}: {s['skipped']}"
-                         for s in skipped if s["legs"] != final.legs]
+        why = "; ".join([f"{_MODE_WORDS[s['legs']]} not tried: {s['skipped']}" for s in skipped if s["legs"] != final.legs]
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
-                           for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode])
-                           and mode != final.legs and mode not in noted])
+                           for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode]) and mode != final.legs])
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -223,46 +201,27 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         flight = has_flight(human, labels)
         modes = auto_legs(human, labels, flight)
 
-    made: dict[tuple[str, float], Attempt] = {}
-
     def attempt(mode: str, k: float) -> Attempt:
-        if (mode, k) not in made:
-            motion = solve(stretch(human, k), mode)
-            made[mode, k] = Attempt(mode, k, motion, judge(motion))
-        return made[mode, k]
+        motion = solve(stretch(human, k), mode)
+        return Attempt(mode, k, motion, judge(motion))
 
     tried: list[Attempt] = []
     chosen = None
     skipped: list[dict] = []
-    tempos = {m: factors for m in modes}  # the tempos each legs mode is searched over
-    i = 0
-    while i < len(modes):
-        mode = modes[i]
-        i += 1
+    for mode in modes:
         if mode == "whole" and legs == "auto":
             why = short_shifts(human, robot, labels, max(factors))
             if why is not None:  # no tempo up to the cap gives the static weight shifts time
                 skipped.append({"legs": mode, "skipped": why})
                 continue
         try:
-            if legs == "auto" and mode == "steps" and "stance" in modes[i:]:
-                first = attempt(mode, factors[0])
-                glide = _glides(first)
-                if glide is not None:  # the stance first; the steps after it if it fails
-                    tried.append(first)
-                    skipped.append({"legs": mode, "skipped": glide, "set_aside": True})
-                    if first.feasible:  # not at the price of a slower tempo
-                        tempos["stance"] = factors[:1]
-                    modes = modes[:i - 1] + ["stance", "steps"] + [m for m in modes[i:] if m != "stance"]
-                    i -= 1
-                    continue
-            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), tempos[mode], ascending=mode == "steps")
+            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors, ascending=mode == "steps")
         except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
             if legs != "auto":
                 raise
             skipped.append({"legs": mode, "skipped": str(err)})
             continue
-        tried += [a for a in runs if not any(a is t for t in tried)]
+        tried += runs
         if ok is not None:
             chosen = ok
             break
