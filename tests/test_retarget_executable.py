@@ -236,6 +236,32 @@ def test_auto_legs_order_follows_the_clip():
     assert auto_legs(walk, stepping, True) == ["steps", "stance"]
 
 
+@requires_shared
+def test_a_gliding_thrower_stands_rather_than_steps_in_place(op3):
+    """MDM's throw #5 glides 5 m (its pelvis travels, so ``steps`` is tried first), but its steps
+    would keep 4 % of their length (told by the steps' first stage, the free solve): the robot
+    would step in place. The stance is tried at the first tempo first and kept, saying why, with
+    about half the keypoint error; throw #25 glides alike but falls in the stance at x1, so its
+    steps come next and are kept at x1 rather than the stance slowed."""
+    from motion2robot.retarget.executable import GLIDE_SHARE
+
+    def kp(m):
+        return float(np.mean(m.meta["solver"]["residual_per_frame"]))
+
+    clips = MOTIONS / "mdm_results" / "mdm_throw_ball_results.npy"
+    motion = retarget(read_motion(clips, clip=5)[0], op3)
+    assert motion.meta["fallback"]["mode"] == "stance" and motion.meta["tempo"] == 1.0
+    # the steps' first stage told the glide; the stance passed: no steps attempt was made
+    assert [(a["legs"], a["tempo"], a["feasible"]) for a in motion.meta["attempts"]] == [("stance", 1.0, True)]
+    assert "steps set aside" in motion.meta["fallback"]["why"] and "glide" in motion.meta["fallback"]["why"]
+    assert [s["legs"] for s in motion.meta["legs_skipped"] if s.get("set_aside")] == ["steps"]
+    stepped = retarget(read_motion(clips, clip=5)[0], op3, RetargetOptions(tempo=1.0, legs="steps"))
+    assert stepped.meta["solver"]["steps"]["step_factor"] < GLIDE_SHARE and kp(motion) < 0.6 * kp(stepped)
+    kept = retarget(read_motion(clips, clip=25)[0], op3)
+    assert kept.meta["fallback"]["mode"] == "steps" and kept.meta["tempo"] == 1.0
+    assert [(a["legs"], a["tempo"]) for a in kept.meta["attempts"]] == [("stance", 1.0), ("steps", 1.0)]
+
+
 def test_ascending_search_stops_at_the_first_tempo_that_passes():
     from motion2robot.retarget.executable import Attempt, _search
 

@@ -37,7 +37,7 @@ from motion2robot.retarget.balance_stage import dynamic_balance
 from motion2robot.retarget.contact_plan import plan_contacts
 from motion2robot.retarget.executable import plan
 from motion2robot.retarget.finite import check_solution
-from motion2robot.retarget.gait import steps
+from motion2robot.retarget.gait import Footing, footing, steps
 from motion2robot.retarget.options import LEGS, RetargetOptions
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.root_pass import root_shift
@@ -67,8 +67,18 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
         human = resample(human, opt.fps)
     require_solvable(human)
     inner = replace(opt, fps=None)
-    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, lambda h, legs: solve_legs(h, robot, inner, legs),
-                check_options)
+    made: dict[int, tuple[HumanMotion, Footing]] = {}  # the probe's first stage, reused by the steps
+
+    def probe(h: HumanMotion) -> float:
+        made[id(h)] = (h, footing(h, robot, inner))
+        return made[id(h)][1].factor
+
+    def solve(h: HumanMotion, legs: str) -> RobotMotion:
+        if legs == "steps" and id(h) in made and made[id(h)][0] is h:
+            return steps(h, robot, inner, made.pop(id(h))[1])
+        return solve_legs(h, robot, inner, legs)
+
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe)
 
 
 def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs: str) -> RobotMotion:

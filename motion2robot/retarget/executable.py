@@ -18,7 +18,10 @@ attempt that passes, in this order:
    ``stance`` (:mod:`~.stance`: legs in a fixed stance, upper body and head perform). A clip whose
    pelvis travels (more than TRAVEL_M from where it starts) tries ``steps`` first: walking is the
    nearest thing to it; one that stays in place tries ``stance`` first, which keeps its tempo more
-   often. ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
+   often; one whose ``steps`` would step in place (the steps kept below :data:`GLIDE_SHARE` of the
+   human's: a glide, as generated throwers skate, told by ``steps``' first stage alone) tries the
+   stance at the first tempo first, then the steps, then the stance slower. ``steps`` is not tried
+   when no foot steps. Clips with flight phases (runs, jumps) skip
    the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
    them with a foot always on the floor.
 
@@ -53,6 +56,13 @@ AUTO_LEGS = LEG_MODES
 #: m (human): a pelvis that goes farther than this from where it starts travels (a walk, not a
 #: motion in place).
 TRAVEL_M = 0.5
+
+#: A ``steps`` attempt whose steps keep less than this share of the human's length (its step
+#: factor) steps in place: the human's steps are then over 1.8 leg lengths at the robot's scale,
+#: beyond a running stride (the dev clips' walks, runs and dances keep 14-63 %; MDM throwers whose
+#: pelvis glides 3-5 m keep 4-8 %): glides, not steps, and the stance, nearer to them (about half
+#: the keypoint error on those throwers), is tried before ``steps`` is kept.
+GLIDE_SHARE = 0.1
 
 _MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
 
@@ -158,6 +168,15 @@ def auto_legs(human: HumanMotion, labels: np.ndarray, flight: bool) -> list[str]
     return [m for m in ([] if flight else ["whole"]) + order if m != "steps" or steps]
 
 
+def _glides(share: float) -> str | None:
+    """Why steps keeping ``share`` of the human's length (the step factor) step in place, or None
+    when they keep GLIDE_SHARE or more."""
+    if share >= GLIDE_SHARE:
+        return None
+    return (f"the human's steps would keep {100 * share:.0f} % of their length (the robot stepping in place): "
+            "they glide rather than step, and the stance is nearer")
+
+
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
               skipped: list[dict]) -> dict | None:
     """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
@@ -170,9 +189,12 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                "cannot produce" + ("; its steps are walked with a foot always on the floor" if final.legs == "steps"
                                    else ""))
     else:
-        why = "; ".join([f"{_MODE_WORDS[s['legs']]} not tried: {s['skipped']}" for s in skipped if s["legs"] != final.legs]
+        noted = {s["legs"] for s in skipped}
+        why = "; ".join([f"{_MODE_WORDS[s['legs']]} {'set aside' if s.get('set_aside') else 'not tried'}: {s['skipped']}"
+                         for s in skipped if s["legs"] != final.legs]
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
-                           for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode]) and mode != final.legs])
+                           for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode])
+                           and mode != final.legs and mode not in noted])
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -186,11 +208,13 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
 
 
 def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
-         check_options: object | None = None) -> tuple[RobotMotion, object | None]:
+         check_options: object | None = None,
+         probe: Callable[[HumanMotion], float] | None = None) -> tuple[RobotMotion, object | None]:
     """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
     attempt, not judged). ``solve(human, legs)``: the robot motion of a legs mode at the human's
     tempo; ``check_options``: the judge's CheckOptions (default: every check with the physics
-    playback). See the module text for the order of attempts."""
+    playback); ``probe(human)``: the step factor ``steps`` would walk ``human`` with (without
+    it, no glide is told apart). See the module text for the order of attempts."""
     factors = _factors(tempo, cap, human, robot)
     judging = tempo == "auto" or legs == "auto"
     judge = _judge(robot, check_options) if judging else (lambda motion: None)
@@ -201,21 +225,45 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         flight = has_flight(human, labels)
         modes = auto_legs(human, labels, flight)
 
+    humans: dict[float, HumanMotion] = {}  # one motion per tempo: the probe and the attempt share it
+
+    def at(k: float) -> HumanMotion:
+        if k not in humans:
+            humans[k] = stretch(human, k)
+        return humans[k]
+
     def attempt(mode: str, k: float) -> Attempt:
-        motion = solve(stretch(human, k), mode)
+        motion = solve(at(k), mode)
         return Attempt(mode, k, motion, judge(motion))
 
     tried: list[Attempt] = []
     chosen = None
     skipped: list[dict] = []
-    for mode in modes:
+    queue = [(m, factors) for m in modes]  # each legs mode with the tempos it is searched over
+    probed = False
+    i = 0
+    while i < len(queue):
+        mode, tempos = queue[i]
+        i += 1
         if mode == "whole" and legs == "auto":
             why = short_shifts(human, robot, labels, max(factors))
             if why is not None:  # no tempo up to the cap gives the static weight shifts time
                 skipped.append({"legs": mode, "skipped": why})
                 continue
         try:
-            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), factors, ascending=mode == "steps")
+            if probe is not None and legs == "auto" and mode == "steps" and not probed \
+                    and any(m == "stance" for m, _ in queue[i:]):
+                probed = True
+                glide = _glides(probe(at(factors[0])))
+                if glide is not None:  # the stance at this tempo, then the steps, then the stance slower
+                    skipped.append({"legs": mode, "skipped": glide, "set_aside": True})
+                    queue[i - 1:] = ([("stance", factors[:1]), ("steps", factors), ("stance", factors[1:])]
+                                     + [q for q in queue[i:] if q[0] != "stance"])
+                    i -= 1
+                    continue
+            if not tempos:
+                continue
+            ok, runs = _search(lambda k, mode=mode: attempt(mode, k), tempos, ascending=mode == "steps")
         except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
             if legs != "auto":
                 raise

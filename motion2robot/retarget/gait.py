@@ -50,7 +50,7 @@ z up; quaternions wxyz.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -111,22 +111,51 @@ JERK_TIME = 0.1
 ZMP_ROUNDS = 3
 
 
-def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
-    """The ``steps`` pipeline on ``human`` at its own tempo (see the module text); ``options``:
-    the RetargetOptions of the whole-body stages it starts from."""
+@dataclass(frozen=True, eq=False)
+class Footing:
+    """Stage 1 of ``steps`` (:func:`footing`): the setup with the walking labels, the free solve
+    ``Q`` (T, nq) with its solver stats and its sole corners (T, 2, 4, 3) m, the leg tracker, the
+    longest step the legs take (m), the factor the human's steps shrink by to it, and the seconds
+    it took (the setup, the solve)."""
+
+    setup: Setup
+    Q: np.ndarray
+    free: object
+    corners: np.ndarray
+    tracker: LegTracker
+    longest: float
+    factor: float
+    prepare_s: float
+    solve_s: float
+
+
+def footing(human: HumanMotion, robot: Robot, options) -> Footing:
+    """Stage 1 of ``steps`` on ``human`` at its own tempo, and the step factor: what the policy of
+    :mod:`~.executable` reads to tell a walk from a glide before the pattern is made."""
     opt = replace(options, dynamic_balance=False)
-    t_all = time.perf_counter()
+    t0 = time.perf_counter()
     setup = prepare(human, robot, opt)
     # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
     native = float(human.meta.get("resampled_from_fps") or human.fps)
     min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
     setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing, LONG_SWING_FRAMES / native))
-    t_solve = time.perf_counter()
+    t1 = time.perf_counter()
     Q, free = free_solve(setup)
-    free_corners = setup.points(Q)[1]
+    corners = setup.points(Q)[1]
     tracker = LegTracker(robot)
     longest = STEP_REACH * float(tracker.straight_reach().min())
-    k = step_factor(anchor_soles(free_corners, setup.labels), setup.labels, longest)
+    k = step_factor(anchor_soles(corners, setup.labels), setup.labels, longest)
+    return Footing(setup, Q, free, corners, tracker, longest, k, t1 - t0, time.perf_counter() - t1)
+
+
+def steps(human: HumanMotion, robot: Robot, options, first: Footing | None = None) -> RobotMotion:
+    """The ``steps`` pipeline on ``human`` at its own tempo (see the module text); ``options``:
+    the RetargetOptions of the whole-body stages it starts from; ``first``: its :func:`footing`
+    when already made (by the policy's probe)."""
+    f = first or footing(human, robot, options)
+    t_rest = time.perf_counter()
+    setup, Q, free, free_corners, tracker = f.setup, f.Q.copy(), f.free, f.corners, f.tracker
+    longest, k = f.longest, f.factor
     width = stance_width(robot)
     legs = foot_ancestor_mask(robot).any(axis=1)
     turn_rate = TURN_SPEED * float(robot.velocity_limit[legs].min()) * (1.0 - 2.0 * SWING_SHAPE[0]) / setup.fps
@@ -138,12 +167,12 @@ def steps(human: HumanMotion, robot: Robot, options) -> RobotMotion:
     Q = free_limbs_clear(setup, walked.params(setup), Q)
     Q[:, 7:] = np.clip(clamp_velocity(Q[:, 7:], robot.velocity_limit, setup.fps), robot.lower, robot.upper)
     pts = setup.points(Q)
-    solve_s = time.perf_counter() - t_solve
+    solve_s = f.solve_s + time.perf_counter() - t_rest
     path = np.linalg.norm(np.diff(Q[:, :2], axis=0), axis=1).sum()
     human_path = np.linalg.norm(np.diff(setup.kp[:, 0, :2], axis=0), axis=1).sum()
     figures.update(step_factor=k, longest_step_m=longest, stance_width_m=width, path_m=float(path),
                    human_path_m=float(human_path))
-    stages = StageFigures(free, None, 0, None, None, solve_s, time.perf_counter() - t_all)
+    stages = StageFigures(free, None, 0, None, None, solve_s, f.prepare_s + solve_s)
     # the keypoint error is the posture's: the human moved along the robot's (shortened) path, as
     # the stance's is against the human held in place; the path itself is reported apart
     along = setup.kp.copy()
