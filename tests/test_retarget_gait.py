@@ -361,7 +361,6 @@ def test_g1_walks_a_real_walk_with_its_feet_on_the_plan(monkeypatch):
     assert c["joint_limits"]["ok"] and c["velocity_limits"]["ok"] and c["ground"]["ok"], c["ground"]
 
 
-
 def _row(labels, f):
     return "".join(str(int(x)) for x in labels[:, f])
 
@@ -406,14 +405,13 @@ def test_a_long_swing_is_sought_only_where_the_stances_keep_their_double_support
 def test_grounding_gives_way_to_a_long_swing_not_to_a_flight():
     """``grounded`` with ``keep_swing_s``: a lift-off right after the other foot lands waits for
     the double support only as far as the swing keeps its length (a 12-frame swing keeps 12, the
-    double support shrinks to what is left, at least a frame); a swing shorter than that is not
-    shortened by the wait either; a foot lifting with the other in the air still waits for the
-    landing."""
+    double support shrinks to what is left, at least a frame); a foot lifting with the other in
+    the air still waits for the landing."""
     # right lands at 10; left lifts at 11 for a 12-frame swing, then both down
     left = "1" * 11 + "0" * 12 + "1" * 7
     right = "1" * 5 + "0" * 5 + "1" * 20
     labels = np.array([[a == "1", b == "1"] for a, b in zip(left, right)])
-    old = grounded(labels, 20.0, 0.2, 0.4)                    # waits 4 frames: the swing 8 frames
+    old = grounded(labels, 20.0, 0.2, 0.4)                    # 4 frames of double support: the swing 9
     assert _row(old, 0) == "1" * 14 + "0" * 9 + "1" * 7
     kept = grounded(labels, 20.0, 0.2, 0.4, keep_swing_s=0.6)
     assert _row(kept, 0) == left                               # the swing keeps its 12 frames

@@ -67,15 +67,15 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
         human = resample(human, opt.fps)
     require_solvable(human)
     inner = replace(opt, fps=None)
-    made: dict[int, tuple[HumanMotion, Footing]] = {}  # the probe's first stage, reused by the steps
+    probed: list[tuple[HumanMotion, Footing]] = []  # plan probes once; the steps of that motion reuse it
 
     def probe(h: HumanMotion) -> float:
-        made[id(h)] = (h, footing(h, robot, inner))
-        return made[id(h)][1].factor
+        probed.append((h, footing(h, robot, inner)))
+        return probed[-1][1].factor
 
     def solve(h: HumanMotion, legs: str) -> RobotMotion:
-        if legs == "steps" and id(h) in made and made[id(h)][0] is h:
-            return steps(h, robot, inner, made.pop(id(h))[1])
+        if legs == "steps" and probed and probed[0][0] is h:
+            return steps(h, robot, inner, probed.pop()[1])
         return solve_legs(h, robot, inner, legs)
 
     return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe)

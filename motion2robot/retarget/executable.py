@@ -189,7 +189,7 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                "cannot produce" + ("; its steps are walked with a foot always on the floor" if final.legs == "steps"
                                    else ""))
     else:
-        noted = {s["legs"] for s in skipped}
+        noted = {s["legs"] for s in skipped if not s.get("set_aside")}  # set aside, it may still have failed
         why = "; ".join([f"{_MODE_WORDS[s['legs']]} {'set aside' if s.get('set_aside') else 'not tried'}: {s['skipped']}"
                          for s in skipped if s["legs"] != final.legs]
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
