@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2robot.hardware.guard import SafetyGuard
-from motion2robot.hardware.trajectory import sample
+from motion2robot.hardware.trajectory import sample, sample_times
 
 #: Ticks the ramp-in may take before :func:`goal_sequence` gives up (a guard that never reaches
 #: its target is a bug, not a slow ramp: 100,000 ticks at 100 Hz are 17 minutes).
@@ -53,6 +53,13 @@ def play_ticks(num_frames: int, fps: float, rate_hz: float) -> int:
     return int(np.floor((num_frames - 1) / fps * rate_hz + 1e-9)) + 1
 
 
+def play_targets(traj: np.ndarray, fps: float, rate_hz: float) -> np.ndarray:
+    """The joint targets (rad, (K, n)) of every play tick of ``traj`` (no loop): row k is
+    :func:`play_target` of tick k, the same numbers."""
+    k = np.arange(play_ticks(traj.shape[0], fps, rate_hz))
+    return sample_times(traj, fps, np.minimum(k / rate_hz, (traj.shape[0] - 1) / fps))
+
+
 @dataclass(frozen=True, eq=False)
 class GoalSequence:
     """Goals in servo ticks, (n,) or (K, n) int64 in the guard's joint order: ``start`` (the
@@ -80,5 +87,5 @@ def goal_sequence(guard: SafetyGuard, traj: np.ndarray, fps: float, rate_hz: flo
             break
         if len(ramp) >= MAX_RAMP_TICKS:
             raise RuntimeError("goal_sequence: the guard never reached the first frame")
-    play = [guard.next_goal(play_target(traj, fps, rate_hz, k)) for k in range(play_ticks(traj.shape[0], fps, rate_hz))]
-    return GoalSequence(start, np.asarray(ramp, dtype=np.int64), np.asarray(play, dtype=np.int64))
+    play = guard.goals(play_targets(traj, fps, rate_hz))
+    return GoalSequence(start, np.asarray(ramp, dtype=np.int64), play)

@@ -86,6 +86,31 @@ class SafetyGuard:
         self.last = goal
         return goal.copy()
 
+    def goals(self, targets: np.ndarray) -> np.ndarray:
+        """Goal ticks (K, n) int64 for K consecutive control ticks towards ``targets`` (K, n) rad:
+        the goals of K calls of :meth:`next_goal`, and the guard left as they would leave it.
+        Where every move is at most the whole ticks a control tick earns (floor of the rate: the
+        budget never binds, since it is at least the rate after every earning) and every target
+        is finite, each goal is its target rounded and clipped, computed at once; otherwise tick
+        by tick."""
+        if self.last is None:
+            raise RuntimeError("guard: start() first")
+        targets = np.asarray(targets, dtype=np.float64)
+        if not len(targets):
+            return np.zeros((0, len(self.lo)), dtype=np.int64)
+        t = self.cal.ticks_float(targets)
+        if np.all(np.isfinite(t)):
+            goal = np.clip(np.rint(t), self.lo, self.hi).astype(np.int64)
+            move = np.abs(np.diff(goal, axis=0, prepend=self.last[None]))
+            if np.all(move <= np.floor(self.rate_max)):
+                cap, budget = self.rate_max + 1.0, self.budget
+                for m in move:  # the budget as next_goal keeps it, to the last bit
+                    budget = np.minimum(budget + self.rate_max, cap)
+                    budget -= m
+                self.budget, self.last = budget, goal[-1].copy()
+                return goal
+        return np.array([self.next_goal(row) for row in targets], dtype=np.int64)
+
     def reached(self, target: np.ndarray) -> bool:
         """True when the last goal equals the (limited) target in ticks."""
         t = self.cal.ticks_float(np.asarray(target, dtype=np.float64))

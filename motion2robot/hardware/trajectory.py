@@ -10,12 +10,18 @@ from motion2robot.robot_motion import RobotMotion
 
 def sample(traj: np.ndarray, fps: float, t: float) -> np.ndarray:
     """Linear interpolation of ``traj`` (T, n) at time ``t`` s (clamped to the ends); NaN stays NaN."""
-    f = min(max(t * fps, 0.0), traj.shape[0] - 1.0)
-    i = int(f)
-    a = f - i
-    if a == 0.0 or i + 1 >= traj.shape[0]:
-        return traj[i].copy()
-    return (1.0 - a) * traj[i] + a * traj[i + 1]
+    return sample_times(traj, fps, np.array([t], dtype=np.float64))[0]
+
+
+def sample_times(traj: np.ndarray, fps: float, times: np.ndarray) -> np.ndarray:
+    """:func:`sample` at each of ``times`` (K,) s: (K, n), every row the same numbers."""
+    traj = np.asarray(traj)
+    f = np.minimum(np.maximum(np.asarray(times, dtype=np.float64) * fps, 0.0), traj.shape[0] - 1.0)
+    i = f.astype(np.int64)
+    a = (f - i)[:, None]
+    j = np.minimum(i + 1, traj.shape[0] - 1)
+    at_frame = (a == 0.0) | (i + 1 >= traj.shape[0])[:, None]
+    return np.where(at_frame, traj[i], (1.0 - a) * traj[i] + a * traj[j])
 
 
 def joint_trajectory(motion: RobotMotion, joints: tuple[str, ...]) -> np.ndarray:
