@@ -15,6 +15,9 @@ Per clip, prints:
   ``check`` with the physics playback, as the policy judged them;
 - the per-joint distance between ``human`` and ``human'`` (cm, mean over frames; mean over
   joints and the largest joint);
+- noise: the retargeting's own sensitivity, the floor under idempotence: RMS (rad) between the
+  robot motion of ``human`` and the retargeting (the same tempo and legs) of ``human`` moved by
+  Gaussian noise of NOISE_M (0.01 mm, far below any capture's or generator's precision);
 - the time of ``project`` per clip (wall seconds, on a shared 2-core machine).
 
 Run:  python scripts/bench_project.py [--robot op3] [--limit N] [--rounds 6] [--csv out.csv]
@@ -30,9 +33,30 @@ import numpy as np
 from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.motion.human import SMPL22
 from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project, robot_points
+from motion2robot.retarget.api import RetargetOptions, solve_legs
+from motion2robot.retarget.tempo import stretch
 from motion2robot.retarget import retarget_and_check
 from motion2robot.robot import load_robot
 
+
+
+#: m, standard deviation of the noise added to every joint coordinate for the sensitivity column.
+NOISE_M = 1e-5
+
+
+def retarget_as(motion, human, robot):
+    """The retargeting of ``human`` at the tempo and legs ``motion`` was made with (no judging)."""
+    fallback = motion.meta.get("fallback")
+    legs = fallback["mode"] if isinstance(fallback, dict) else "whole"
+    return solve_legs(stretch(human, float(motion.meta.get("tempo") or 1.0)), robot, RetargetOptions(), legs)
+
+
+def sensitivity(p, robot) -> float:
+    """RMS (rad) between ``p``'s robot motion and the retargeting, at its tempo and legs, of its
+    human moved by NOISE_M Gaussian noise (a fixed seed)."""
+    h = p.original
+    noisy = h.with_(positions=np.asarray(h.positions) + NOISE_M * np.random.default_rng(0).standard_normal(np.shape(h.positions)))
+    return hinge_rms(p.robot_motion, retarget_as(p.robot_motion, noisy, robot))
 
 
 def _verdict(ok: bool | None) -> str:
@@ -57,7 +81,7 @@ def main() -> int:
     robot = load_robot(args.robot)
     rows = []
     print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'rnds':>4s} {'legs':>6s} "
-          f"{'exe before':>10s} {'after':>5s} "
+          f"{'noise':>7s} {'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
     for name, human in readable_clips(args.motions, args.limit):
         t0 = time.perf_counter()
@@ -70,10 +94,12 @@ def main() -> int:
         again, report = retarget_and_check(p.human, robot)
         rms = hinge_rms(p.robot_motion, again)
         gap = keypoint_gap_mm(p.robot_motion, again, robot)
+        noise = sensitivity(p, robot)
         jd = p.joint_distance
         worst = max(jd, key=jd.get)
         fallback = p.robot_motion.meta.get("fallback")
         row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "rounds": len(p.rounds),
+               "noise": noise,
                "legs": fallback["mode"] if isinstance(fallback, dict) else "whole",
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
                "tempo_again": float(again.meta.get("tempo", 1.0)),
@@ -83,7 +109,7 @@ def main() -> int:
         rows.append(row)
         idem = f"{rms:9.4f}" if np.isfinite(rms) else f"{'tempo differs':>9s}"
         print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
-              f"{_verdict(row['before']):>10s} "
+              f"{noise:7.4f} {_verdict(row['before']):>10s} "
               f"{_verdict(row['after']):>5s} {row['dist_cm']:7.1f} {worst:>14s} {row['worst_cm']:5.1f} {dt:6.1f}",
               flush=True)
     if not rows:
@@ -100,6 +126,10 @@ def main() -> int:
         gaps = np.array([r["kp_mm"] for r in same])
         print(f"the same comparison in space, robot keypoints: median {np.median(gaps):.2f} mm, "
               f"max {gaps.max():.2f} mm")
+    noise = np.array([r["noise"] for r in rows])
+    print(f"the retargeting's own sensitivity (the same tempo and legs, the human moved by {1000 * NOISE_M:g} mm "
+          f"noise), hinge RMS: median {np.median(noise):.4f} rad, max {noise.max():.4f} rad; within {TOLERANCE:g} rad: "
+          f"{int((noise <= TOLERANCE).sum())}/{len(noise)}")
     if len(direct):
         print(f"without the target correction (direct mapping back): median {np.median(direct):.4f} rad, "
               f"max {direct.max():.4f} rad")
@@ -123,10 +153,10 @@ def main() -> int:
         import csv
         with open(args.csv, "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(["clip", "idempotence_rad", "direct_rad", "rounds", "legs", "tempo", "tempo_again",
+            w.writerow(["clip", "idempotence_rad", "direct_rad", "noise_rad", "rounds", "legs", "tempo", "tempo_again",
                         "executable_before", "executable_after", "distance_cm", "worst_joint", "worst_cm", "time_s"])
             for r in rows:
-                w.writerow([r["clip"], r["idempotence"], r["direct"], r["rounds"], r["legs"], r["tempo"],
+                w.writerow([r["clip"], r["idempotence"], r["direct"], r["noise"], r["rounds"], r["legs"], r["tempo"],
                             r["tempo_again"], r["before"], r["after"], round(r["dist_cm"], 2), r["worst"],
                             round(r["worst_cm"], 2), round(r["time_s"], 2)])
     return 0
