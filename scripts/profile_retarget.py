@@ -4,8 +4,9 @@ Over the readable clips of ``../shared/motions`` (or ``--clips`` indices of them
 default retarget (tempo/legs policy, attempts judged by ``check``) with every stage of
 ``whole_body``, the judge's parts and the physics playback timed in CPU seconds
 (``time.process_time``), and prints per clip the attempts taken, then the totals: frames per CPU
-second, each stage's share, the solves and checks of the returned attempt vs the others, and the
-playback of the returned attempts alone (the floor no policy change removes).
+second, each stage's share, the solves and checks of the returned attempt vs the others, the
+playback of the returned attempts alone (the floor no policy change removes) and the retargeting
+stages of the returned attempts alone (what one attempt at a known tempo and legs costs).
 
 Run:  python scripts/profile_retarget.py [--robot op3] [--limit N] [--clips 2,7,31]
 """
@@ -116,6 +117,10 @@ def main() -> int:
     if floor:
         print(f"playback of the returned attempts alone: {1e6 * floor / frames:.0f} us per input frame "
               f"(at most {frames / floor:,.0f} frames per CPU second if nothing else cost anything)")
+    solved = role["solve, returned attempt"]
+    if solved:
+        print(f"the retargeting stages of the returned attempts alone (at their tempo and legs, no judging, no "
+              f"other attempt): {frames / solved:,.0f} frames per CPU second")
     return 0
 
 
