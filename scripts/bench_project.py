@@ -5,7 +5,10 @@ Per clip, prints:
 - idempotence: RMS (rad, over frames and hinges) between the robot motion of ``human`` and the
   default retargeting (tempo and legs judged by ``check``) of ``human'``; ``direct`` is the same
   figure for the robot's keypoints mapped back without the target correction (round 1 of
-  :func:`~motion2robot.projection.refine`), ``rounds`` how many correction rounds ran;
+  :func:`~motion2robot.projection.refine`), ``same`` for the ``human'`` returned, retargeted at
+  the tempo and legs of ``human``'s robot motion (the correction's own figure, its best round:
+  the default retargeting may pick another legs mode or tempo for ``human'``), ``rounds`` how
+  many correction rounds ran;
   "tempo differs" when the policy picked another tempo for ``human'`` (motions of different
   lengths);
 - keypoints: mean distance (mm, robot scale) between the robot's keypoints in the two robot
@@ -80,7 +83,7 @@ def main() -> int:
         return 2
     robot = load_robot(args.robot)
     rows = []
-    print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'rnds':>4s} {'legs':>6s} "
+    print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'same':>7s} {'rnds':>4s} {'legs':>6s} "
           f"{'noise':>7s} {'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
     for name, human in readable_clips(args.motions, args.limit):
@@ -98,7 +101,8 @@ def main() -> int:
         jd = p.joint_distance
         worst = max(jd, key=jd.get)
         fallback = p.robot_motion.meta.get("fallback")
-        row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "rounds": len(p.rounds),
+        row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "same": min(p.rounds),
+               "rounds": len(p.rounds),
                "noise": noise,
                "legs": fallback["mode"] if isinstance(fallback, dict) else "whole",
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
@@ -108,7 +112,7 @@ def main() -> int:
                "joint_cm": {k: 100 * v for k, v in jd.items()}}
         rows.append(row)
         idem = f"{rms:9.4f}" if np.isfinite(rms) else f"{'tempo differs':>9s}"
-        print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
+        print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['same']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
               f"{noise:7.4f} {_verdict(row['before']):>10s} "
               f"{_verdict(row['after']):>5s} {row['dist_cm']:7.1f} {worst:>14s} {row['worst_cm']:5.1f} {dt:6.1f}",
               flush=True)
@@ -126,6 +130,11 @@ def main() -> int:
         gaps = np.array([r["kp_mm"] for r in same])
         print(f"the same comparison in space, robot keypoints: median {np.median(gaps):.2f} mm, "
               f"max {gaps.max():.2f} mm")
+    own = np.array([r["same"] for r in rows if np.isfinite(r["same"])])
+    if len(own):
+        print(f"at the tempo and legs of human's robot motion (the correction's own figure, its best round): median "
+              f"{np.median(own):.4f} rad, max {own.max():.4f} rad; within {TOLERANCE:g} rad: "
+              f"{int((own <= TOLERANCE).sum())}/{len(own)}; within 0.01 rad: {int((own <= 0.01).sum())}/{len(own)}")
     noise = np.array([r["noise"] for r in rows])
     print(f"the retargeting's own sensitivity (the same tempo and legs, the human moved by {1000 * NOISE_M:g} mm "
           f"noise), hinge RMS: median {np.median(noise):.4f} rad, max {noise.max():.4f} rad; within {TOLERANCE:g} rad: "
@@ -153,10 +162,10 @@ def main() -> int:
         import csv
         with open(args.csv, "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(["clip", "idempotence_rad", "direct_rad", "noise_rad", "rounds", "legs", "tempo", "tempo_again",
+            w.writerow(["clip", "idempotence_rad", "direct_rad", "same_legs_rad", "noise_rad", "rounds", "legs", "tempo", "tempo_again",
                         "executable_before", "executable_after", "distance_cm", "worst_joint", "worst_cm", "time_s"])
             for r in rows:
-                w.writerow([r["clip"], r["idempotence"], r["direct"], r["noise"], r["rounds"], r["legs"], r["tempo"],
+                w.writerow([r["clip"], r["idempotence"], r["direct"], r["same"], r["noise"], r["rounds"], r["legs"], r["tempo"],
                             r["tempo_again"], r["before"], r["after"], round(r["dist_cm"], 2), r["worst"],
                             round(r["worst_cm"], 2), round(r["time_s"], 2)])
     return 0
