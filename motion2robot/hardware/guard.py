@@ -88,7 +88,8 @@ class SafetyGuard:
 
     def goals(self, targets: np.ndarray) -> np.ndarray:
         """Goal ticks (K, n) int64 for K consecutive control ticks towards ``targets`` (K, n) rad:
-        the goals of K calls of :meth:`next_goal`, and the guard left as they would leave it.
+        the goals of K calls of :meth:`next_goal` (at the velocity limit, not the ramp speed), and
+        the guard left as they would leave it.
         Where every move is at most the whole ticks a control tick earns (floor of the rate: the
         budget never binds, since it is at least the rate after every earning) and every target
         is finite, each goal is its target rounded and clipped, computed at once; otherwise tick
