@@ -83,7 +83,7 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
 
 def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[HumanMotion], RobotMotion]:
     """The retargeting that made ``motion``, as one function of the human motion: its tempo factor
-    and its legs, no judging: a ``steps`` result's by the ``steps`` pattern (corrected against the
+    (in the result's meta, key ``tempo``) and its legs, no judging: a ``steps`` result's by the ``steps`` pattern (corrected against the
     whole body instead, whose feet ``human'`` cannot steer onto the pattern's footholds, the
     rounds of the Bandai walk stalled at 0.068 rad), the others by the whole-body pipeline (a
     ``stance`` result's human' already stands in the stance, and whole body is what the legs
@@ -103,6 +103,8 @@ def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[H
     def solve(h: HumanMotion) -> RobotMotion:
         if opt.fps is not None and abs(opt.fps - h.fps) > 1e-9:
             h = resample(h, opt.fps)
-        return solve_legs(stretch(h, k), robot, inner, legs)
+        # its meta says the tempo, as the policy's does: the way back maps human frame i to robot
+        # frame i * k (without it, frame i, and the rounds of a slowed clip compared the wrong frames)
+        return solve_legs(stretch(h, k), robot, inner, legs).with_(meta={"tempo": k})
 
     return solve
