@@ -43,10 +43,9 @@ def test_cart_table_shift_puts_the_zmp_inside_and_starts_and_ends_at_rest():
 
 
 def test_a_zmp_already_inside_needs_no_shift_and_is_told_apart_from_one_outside():
-    """``inside_planes`` (which lets the walking pattern and the dynamic-balance stage skip the
-    QP) agrees with the QP: a ZMP inside every supported frame's box gets no shift, one 5 mm out
-    of it for 0.4 s gets one; unsupported frames, frames without a ZMP and padding planes do not
-    count."""
+    """``inside_planes`` tells a ZMP inside every supported frame's box (``cart_table_shift``
+    gives it no shift, without its QP) from one 5 mm out of it for 0.4 s (the QP shifts it);
+    unsupported frames, frames without a ZMP and padding planes do not count."""
     T, fps, z = 200, 50.0, 0.25
     t = np.arange(T) / fps
     zmp = np.stack([0.025 * np.sin(t), np.zeros(T)], axis=1)

@@ -19,7 +19,7 @@ from motion2robot.retarget.contact_plan import ContactPlan
 from motion2robot.retarget.setup import Setup
 from motion2robot.retarget.solve_stages import EXTRA_CORRECTIONS
 from motion2robot.retarget.solver import EXTRA_TOLERANCE, correct
-from motion2robot.retarget.zmp_plan import MIN_SHIFT, cart_table_shift, com_boxes, inside_planes, multibody_zmp
+from motion2robot.retarget.zmp_plan import MIN_SHIFT, cart_table_shift, com_boxes, multibody_zmp
 
 #: Rounds of the ZMP planning stage at most.
 ZMP_ROUNDS = 2
@@ -45,8 +45,6 @@ def dynamic_balance(setup: Setup, plan: ContactPlan, Q: np.ndarray) -> tuple[np.
         figures["skipped"] = f"the ZMP is {before:.2f} m outside the soles, beyond {reach:.2f} m"
         return Q, figures
     for _ in range(ZMP_ROUNDS):
-        if inside_planes(zmp, planes, support):  # the QP's answer would be no shift at all
-            break
         d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps)
         if np.abs(d).max() < MIN_SHIFT:
             break

@@ -65,7 +65,7 @@ from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
 from motion2robot.retarget.smoothing import low_pass, smooth_hinges
 from motion2robot.retarget.solve_stages import free_limbs_clear, free_solve
-from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, inside_planes, multibody_zmp
+from motion2robot.retarget.zmp_plan import GRAVITY, MIN_SHIFT, cart_table_shift, multibody_zmp
 from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
@@ -250,8 +250,6 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray,
         if k == ZMP_ROUNDS - 1 or err.max() > LOST:
             break
         zmp, com = multibody_zmp(out, fps, robot)
-        if inside_planes(zmp, planes, support):  # the QP's answer would be no shift at all
-            break
         d, _ = cart_table_shift(zmp, com[:, 2], planes, support, fps, JERK_TIME)
         if np.abs(d).max() < MIN_SHIFT:
             break

@@ -101,11 +101,12 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     zmp (T, 2): the trajectory's ZMP (NaN rows are left unconstrained); com_z (T,) CoM heights;
     jerk_time: s, weight of the shift's jerk (jerk x jerk_time^3 weighs like a shift; 0 = not
     charged): with it the CoM's acceleration, and so the ZMP, changes smoothly where the support
-    polygon changes instead of jumping in one frame."""
+    polygon changes instead of jumping in one frame. A ZMP that already meets every constraint
+    (:func:`inside_planes`) gets no shift without solving the QP: its optimum is then exactly none."""
     T = len(zmp)
     frames, fi, n_x, n_y, rhs = _constraints(zmp, planes, support)
     k = len(fi)
-    if T < 3 or not k:
+    if T < 3 or not k or np.all(rhs >= 0.0):
         return np.zeros((T, 2)), np.zeros(T)
     # M = I - (z_c / g) fps^2 D2: the ZMP change per axis is M d; row t holds (t, 1) then its three
     # D2 entries (t-1, t, t+1, ends replicated), in this order
