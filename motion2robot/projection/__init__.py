@@ -34,7 +34,11 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    ``h <- h + (P(q0) - P(R(h)))`` (P: steps 1-4, R: the retargeting at the chosen tempo and legs,
    q0 the robot motion of the original) until its robot motion is within :data:`TOLERANCE` rad
    RMS of q0: ``human'`` is then a human motion whose retargeting *is* the robot motion, found
-   from the robot's own keypoints. :attr:`Projection.direct` keeps steps 1-4 alone (what the
+   from the robot's own keypoints. The retargeting passes on only part of a change of its targets
+   (its few block-Jacobi iterations, damped by the temporal terms: a fifth to two thirds on
+   weakly held joints such as the head tilt and the elbows), so each round is aimed past q0 by
+   the inverse of that share (:mod:`~.attenuation`: P(aim) instead of P(q0)), damped further
+   when a round overshoots or the rounds stall. :attr:`Projection.direct` keeps steps 1-4 alone (what the
    viewer and the report draw).
 
 ``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
@@ -50,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from motion2robot.motion.human import SMPL22, HumanMotion
+from motion2robot.projection.attenuation import Attenuation, attenuation
 from motion2robot.projection.correction import MEMORY, ROUNDS, TOLERANCE, chosen_solve, hinge_rms, refine
 from motion2robot.projection.inputs import MotionArrayError, as_human
 from motion2robot.projection.mapping import project_motion, robot_points
@@ -65,7 +70,7 @@ from motion2robot.projection.maths import (
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
-__all__ = ["MEMORY", "ROUNDS", "TOLERANCE", "MotionArrayError", "Projection", "as_human", "chosen_solve", "fill_torso",
+__all__ = ["Attenuation", "attenuation", "MEMORY", "ROUNDS", "TOLERANCE", "MotionArrayError", "Projection", "as_human", "chosen_solve", "fill_torso",
            "from_canonical", "hinge_rms", "human_torso", "joint_distance", "project", "project_motion", "refine",
            "robot_frames", "robot_points", "torso_rotations", "unscale"]
 
@@ -84,7 +89,7 @@ class Projection:
     positions: (T, 22, 3) ``human'`` in the input's own axes and units (see the module text).
     direct: the robot's keypoints mapped back without the target correction (steps 1-4).
     rounds: the hinge RMS (rad) between the robot motion and the retargeting of each round's
-        ``human'`` (the last one is ``human``'s; see :func:`refine`).
+        ``human'`` (the smallest is ``human``'s, the best round's; see :func:`refine`).
     """
 
     human: HumanMotion
@@ -99,9 +104,9 @@ class Projection:
     @property
     def idempotence_rms(self) -> float | None:
         """RMS (rad) over frames and hinges between the robot motion and the retargeting of
-        ``human'`` at the same tempo and legs, as the last correction round measured (None when
-        no round ran)."""
-        return self.rounds[-1] if self.rounds else None
+        ``human'`` at the same tempo and legs (the best round's: the ``human'`` returned; None
+        when no round ran)."""
+        return min(self.rounds) if self.rounds else None
 
     @property
     def executable(self) -> bool | None:
@@ -130,6 +135,23 @@ class Projection:
                   f"(largest: {worst[0]} {100 * worst[1]:.1f} cm)")
 
 
+def _aim(motion: RobotMotion, robot: Robot, options: Any):
+    """The correction rounds' aim (:meth:`Attenuation.aim`), the attenuation computed at the first
+    round that needs it."""
+    from motion2robot.retarget.api import RetargetOptions
+
+    made: list[Attenuation] = []
+
+    def aim(current: RobotMotion, mu: float) -> RobotMotion:
+        if not made:
+            fallback = motion.meta.get("fallback")
+            steps = isinstance(fallback, Mapping) and fallback.get("mode") == "steps"
+            made.append(attenuation(motion, robot, options or RetargetOptions(), tracked_legs=not steps))
+        return made[0].aim(current, mu)
+
+    return aim
+
+
 def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, check_options: Any = None,
             layout: str = "humanml3d_joints", fps: float | None = None, mean: Any = None, std: Any = None,
             rounds: int = ROUNDS, tolerance: float = TOLERANCE) -> Projection:
@@ -149,7 +171,8 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     rb = robot if isinstance(robot, Robot) else load_robot(robot)
     robot_motion, report = retarget_and_check(human, rb, options, check_options)
     direct = project_motion(robot_motion, rb, human)
-    projected, errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance)
+    projected, errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance,
+                               aim=_aim(robot_motion, rb, options))
     positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
     return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
                       distance=joint_distance(human.positions, projected.positions), positions=positions,

@@ -25,6 +25,15 @@ STALL_ROUNDS = 3
 STALL_GAIN = 0.05
 #: Rounds remembered by the Anderson mixing of the correction.
 MEMORY = 4
+#: Damping of the first rounds' inverse attenuation (:mod:`~.attenuation`): they are aimed at
+#: most 1 + 1/MU times as far as a plain round.
+MU = 0.1
+#: A round whose RMS exceeds OVERSHOOT x the best met overshot: the rounds go back to the best
+#: ``human'`` and damp the inverse MU_GROWTH times more.
+OVERSHOOT = 1.25
+MU_GROWTH = 4.0
+#: The largest damping tried: a correction that stalls at it stops.
+MU_LAST = 2.0
 
 
 def hinge_rms(a: RobotMotion, b: RobotMotion) -> float:
@@ -49,16 +58,22 @@ def anderson_step(xs: list[np.ndarray], fs: list[np.ndarray]) -> np.ndarray:
 
 
 def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callable[[HumanMotion], RobotMotion],
-           rounds: int = ROUNDS, tolerance: float = TOLERANCE,
-           memory: int = MEMORY) -> tuple[HumanMotion, tuple[float, ...]]:
+           rounds: int = ROUNDS, tolerance: float = TOLERANCE, memory: int = MEMORY,
+           aim: Callable[[RobotMotion, float], RobotMotion] | None = None) -> tuple[HumanMotion, tuple[float, ...]]:
     """The target correction (step 5 of the module text): starting from ``direct`` (= P(motion)),
     solve the fixed point ``P(solve(h)) = P(motion)`` for ``h`` by Anderson-accelerated rounds of
-    ``h <- h + (P(motion) - P(solve(h)))`` (:func:`anderson_step`, the last ``memory`` rounds)
-    until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion`` or the rounds stall
-    (STALL_ROUNDS, STALL_GAIN). Returns the best ``h`` met and the RMS of every round tried (a
-    round whose solve changes the frame count stops the rounds)."""
+    ``h <- h + (P(aim(q, mu)) - P(q))``, q = ``solve(h)`` (:func:`anderson_step`, the last
+    ``memory`` rounds) until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion`` or the
+    rounds stall (STALL_ROUNDS, STALL_GAIN). ``aim(q, mu)``: the robot motion the round maps back,
+    ``motion`` moved further by what the retargeting will not pass on
+    (:meth:`~.attenuation.Attenuation.aim`, damped by ``mu``); None: ``motion`` itself (plain
+    rounds). A round that ends more than OVERSHOOT times the best RMS met goes back to the best
+    ``h`` with ``mu`` x MU_GROWTH and a fresh mixing history. Returns the best ``h`` met and the
+    RMS of every round tried (a round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
-    h, best, errors = direct, (float("inf"), direct), []
+    h, errors = direct, []
+    best: tuple[float, HumanMotion, RobotMotion | None] = (float("inf"), direct, None)
+    mu, since = MU, 0
     xs: list[np.ndarray] = []
     fs: list[np.ndarray] = []
     for _ in range(max(1, rounds)):
@@ -66,14 +81,21 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         err = hinge_rms(q, motion)
         errors.append(err)
         if err < best[0]:
-            best = (err, h)
+            best = (err, h, q)
+        elif aim is not None and err > OVERSHOOT * best[0] and best[2] is not None:
+            mu *= MU_GROWTH  # it overshot: from the best again, aimed less far
+            h, q, xs, fs = best[1], best[2], [], []
         if err <= tolerance or not np.isfinite(err):
             break
-        if len(errors) > STALL_ROUNDS and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]):
-            break
+        if len(errors) - since > STALL_ROUNDS and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]):
+            if aim is None or mu * MU_GROWTH > MU_LAST:
+                break
+            mu *= MU_GROWTH  # stalled: from the best again, aimed less far (plainer rounds)
+            h, q, xs, fs, since = best[1], best[2], [], [], len(errors)
         # compared at the scale this solve computed from h's bone lengths: the fixed point is in
         # the robot's space (keypoints equal), not at the original's scale
-        goal = project_motion(motion.with_(meta={"scale": q.meta["scale"]}), robot, h).positions
+        target = motion if aim is None else aim(q, mu)
+        goal = project_motion(target.with_(meta={"scale": q.meta["scale"]}), robot, h).positions
         xs.append(np.asarray(h.positions).ravel())
         fs.append((goal - project_motion(q, robot, h).positions).ravel())
         xs, fs = xs[-memory - 1:], fs[-memory - 1:]
