@@ -124,3 +124,21 @@ def test_stalled_aimed_rounds_go_plainer_then_stop() -> None:
     tried = sorted(set(mus))
     assert tried == [MU * MU_GROWTH ** i for i in range(len(tried))] and tried[-1] * MU_GROWTH > MU_LAST
     assert len(errors) == len(tried) * (STALL_ROUNDS + 1) and np.allclose(errors, 0.02)
+
+
+def test_a_steps_result_passes_its_root_and_legs_as_they_are() -> None:
+    """The walking pattern, not the solve, lays a ``steps`` result's root and legs: there the model
+    passes everything (G = I) and aims no further; the arms and head keep the solve's share."""
+    from motion2robot.retarget import RetargetOptions
+    from motion2robot.robot.chains import foot_ancestor_mask
+
+    robot = _robot()
+    motion = _walked(robot)
+    solved = attenuation(motion, robot, RetargetOptions()).share
+    walked = attenuation(motion, robot, RetargetOptions(), tracked_legs=False).share
+    laid = np.concatenate([np.ones(6, dtype=bool), foot_ancestor_mask(robot).any(axis=1)])
+    assert np.array_equal(walked[:, laid][:, :, laid], np.broadcast_to(np.eye(laid.sum()), walked[:, laid][:, :, laid].shape))
+    assert np.all(walked[:, laid][:, :, ~laid] == 0.0) and np.all(walked[:, ~laid][:, :, laid] == 0.0)
+    assert np.array_equal(walked[:, ~laid][:, :, ~laid], solved[:, ~laid][:, :, ~laid])
+    arms = solved[:, ~laid][:, :, ~laid]
+    assert np.all(np.diagonal(arms, axis1=1, axis2=2) < 1.0)  # the solve passes on less than all

@@ -130,8 +130,8 @@ def attenuation(motion: RobotMotion, robot: Robot, options, tracked_legs: bool =
     left_pinned = np.linalg.matrix_power(np.linalg.solve(pinned + D, np.broadcast_to(D, pinned.shape)), n_pinned)
     share = np.eye(nv) - left_pinned @ left_free
     if not tracked_legs:
-        laid = np.concatenate([np.ones(6, dtype=bool), foot_ancestor_mask(robot).any(axis=1)])
+        laid = np.flatnonzero(np.concatenate([np.ones(6, dtype=bool), foot_ancestor_mask(robot).any(axis=1)]))
         share[:, laid, :] = 0.0
         share[:, :, laid] = 0.0
-        share[:, laid, laid] = 1.0
+        share[:, laid, laid] = 1.0  # (i, i) for every laid coordinate i
     return Attenuation(motion, share, robot.model)
