@@ -38,8 +38,8 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    (its few block-Jacobi iterations, damped by the temporal terms: a fifth to two thirds on
    weakly held joints such as the head tilt and the elbows), so each round is aimed past q0 by
    the inverse of that share (:mod:`~.attenuation`: P(aim) instead of P(q0)), damped further
-   when a round overshoots or the rounds stall. :attr:`Projection.direct` keeps steps 1-4 alone (what the
-   viewer and the report draw).
+   when a round overshoots or the rounds stall. :attr:`Projection.direct` keeps steps 1-4 alone
+   (what the viewer and the report draw).
 
 ``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
 :attr:`Projection.positions` gives it in the input's own axes and units (for arrays and tensors:
@@ -70,8 +70,8 @@ from motion2robot.projection.maths import (
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
-__all__ = ["Attenuation", "attenuation", "MEMORY", "ROUNDS", "TOLERANCE", "MotionArrayError", "Projection", "as_human", "chosen_solve", "fill_torso",
-           "from_canonical", "hinge_rms", "human_torso", "joint_distance", "project", "project_motion", "refine",
+__all__ = ["MEMORY", "ROUNDS", "TOLERANCE", "Attenuation", "MotionArrayError", "Projection", "as_human", "attenuation",
+           "chosen_solve", "fill_torso", "from_canonical", "hinge_rms", "human_torso", "joint_distance", "project", "project_motion", "refine",
            "robot_frames", "robot_points", "torso_rotations", "unscale"]
 
 

@@ -67,9 +67,10 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
     rounds stall (STALL_ROUNDS, STALL_GAIN). ``aim(q, mu)``: the robot motion the round maps back,
     ``motion`` moved further by what the retargeting will not pass on
     (:meth:`~.attenuation.Attenuation.aim`, damped by ``mu``); None: ``motion`` itself (plain
-    rounds). A round that ends more than OVERSHOOT times the best RMS met goes back to the best
-    ``h`` with ``mu`` x MU_GROWTH and a fresh mixing history. Returns the best ``h`` met and the
-    RMS of every round tried (a round whose solve changes the frame count stops the rounds)."""
+    rounds). A round that ends more than OVERSHOOT times the best RMS met, or rounds that stall,
+    go back to the best ``h`` with ``mu`` x MU_GROWTH and a fresh mixing history (stalled with
+    ``mu`` at MU_LAST, they stop). Returns the best ``h`` met and the RMS of every round tried (a
+    round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
     h, errors = direct, []
     best: tuple[float, HumanMotion, RobotMotion | None] = (float("inf"), direct, None)
@@ -84,7 +85,7 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
             best = (err, h, q)
         elif aim is not None and err > OVERSHOOT * best[0] and best[2] is not None:
             mu *= MU_GROWTH  # it overshot: from the best again, aimed less far
-            h, q, xs, fs = best[1], best[2], [], []
+            h, q, xs, fs, since = best[1], best[2], [], [], len(errors)
         if err <= tolerance or not np.isfinite(err):
             break
         if len(errors) - since > STALL_ROUNDS and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]):
