@@ -37,6 +37,7 @@ from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.motion.human import SMPL22
 from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project, robot_points
 from motion2robot.retarget.api import RetargetOptions, solve_legs
+from motion2robot.retarget.executable import legs_of
 from motion2robot.retarget.tempo import stretch
 from motion2robot.retarget import retarget_and_check
 from motion2robot.robot import load_robot
@@ -48,10 +49,9 @@ NOISE_M = 1e-5
 
 
 def retarget_as(motion, human, robot):
-    """The retargeting of ``human`` at the tempo and legs ``motion`` was made with (no judging)."""
-    fallback = motion.meta.get("fallback")
-    legs = fallback["mode"] if isinstance(fallback, dict) else "whole"
-    return solve_legs(stretch(human, float(motion.meta.get("tempo") or 1.0)), robot, RetargetOptions(), legs)
+    """The retargeting of ``human`` at the tempo and legs ``motion`` was made with (no judging; a
+    stance result by the stance, unlike the correction's solve, whose ``human'`` already stands)."""
+    return solve_legs(stretch(human, float(motion.meta.get("tempo") or 1.0)), robot, RetargetOptions(), legs_of(motion))
 
 
 def sensitivity(p, robot) -> float:
@@ -100,11 +100,10 @@ def main() -> int:
         noise = sensitivity(p, robot)
         jd = p.joint_distance
         worst = max(jd, key=jd.get)
-        fallback = p.robot_motion.meta.get("fallback")
         row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "same": min(p.rounds),
                "rounds": len(p.rounds),
                "noise": noise,
-               "legs": fallback["mode"] if isinstance(fallback, dict) else "whole",
+               "legs": legs_of(p.robot_motion),
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
                "tempo_again": float(again.meta.get("tempo", 1.0)),
                "before": p.executable, "after": None if report is None else bool(report.feasible),

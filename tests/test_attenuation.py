@@ -42,9 +42,9 @@ def test_aim_is_the_motion_where_everything_passes_and_further_where_half_does()
     motion = _walked(robot)
     current = motion.with_(qpos=motion.qpos + np.r_[np.zeros(7), 0.01 * np.ones(robot.n_joints)])
     nv = robot.model.nv
-    passes_all = Attenuation(motion, np.broadcast_to(np.eye(nv), (motion.num_frames, nv, nv)), robot.model)
+    passes_all = Attenuation(motion, np.broadcast_to(np.eye(nv), (motion.num_frames, nv, nv)))
     assert np.allclose(passes_all.aim(current, 0.1).qpos, motion.qpos, atol=1e-12)
-    half = Attenuation(motion, np.broadcast_to(0.5 * np.eye(nv), (motion.num_frames, nv, nv)), robot.model)
+    half = Attenuation(motion, np.broadcast_to(0.5 * np.eye(nv), (motion.num_frames, nv, nv)))
     gap = _tangent(robot.model, motion, current)
     # undamped, a round aims twice as far past the motion as the gap; damped by mu, (1 + mu) / (0.5 + mu)
     for mu, gain in ((1e-9, 2.0), (0.5, 1.5)):

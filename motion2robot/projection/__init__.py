@@ -139,14 +139,14 @@ def _aim(motion: RobotMotion, robot: Robot, options: Any):
     """The correction rounds' aim (:meth:`Attenuation.aim`), the attenuation computed at the first
     round that needs it."""
     from motion2robot.retarget.api import RetargetOptions
+    from motion2robot.retarget.executable import legs_of
 
     made: list[Attenuation] = []
 
     def aim(current: RobotMotion, mu: float) -> RobotMotion:
         if not made:
-            fallback = motion.meta.get("fallback")
-            steps = isinstance(fallback, Mapping) and fallback.get("mode") == "steps"
-            made.append(attenuation(motion, robot, options or RetargetOptions(), tracked_legs=not steps))
+            tracked = legs_of(motion) != "steps"
+            made.append(attenuation(motion, robot, options or RetargetOptions(), tracked_legs=tracked))
         return made[0].aim(current, mu)
 
     return aim

@@ -34,7 +34,7 @@ import mujoco
 import numpy as np
 
 from motion2robot.retarget.costs import Weights
-from motion2robot.retarget.problem import build_spec
+from motion2robot.retarget.problem import ProblemSpec, apply_step, build_spec, tangent_diff
 from motion2robot.retarget.setup import rate_weights
 from motion2robot.robot.chains import foot_ancestor_mask
 from motion2robot.robot.robot import Robot
@@ -44,39 +44,32 @@ from motion2robot.robot_motion import RobotMotion
 @dataclass(frozen=True)
 class Attenuation:
     """share: (T, nv, nv) the share G of a smooth change of the targets that reaches the output,
-    per frame of ``motion`` (the robot motion it was linearised at); model: the robot's MuJoCo
-    model (its tangent space)."""
+    per frame of ``motion`` (the robot motion it was linearised at)."""
 
     motion: RobotMotion
     share: np.ndarray
-    model: mujoco.MjModel
 
     def aim(self, current: RobotMotion, mu: float) -> RobotMotion:
         """The robot motion a correction round should map back to get ``current`` (the retargeting
         of this round's ``human'``) to :attr:`motion`: ``motion (+) ((1 + mu) (G + mu I)^-1 d - d)``,
         d = ``motion (-) current`` per frame (tangent space). ``mu`` > 0 damps the inverse."""
-        m, T, model = self.motion, self.motion.num_frames, self.model
+        m = self.motion
         if current.qpos.shape != m.qpos.shape:
-            raise ValueError(f"the retargeting has {current.num_frames} frames, the robot motion {T}")
-        nv = self.share.shape[1]
-        gap = np.zeros((T, nv))
-        for t in range(T):
-            mujoco.mj_differentiatePos(model, gap[t], 1.0, current.qpos[t], m.qpos[t])
-        damped = self.share + mu * np.eye(nv)
+            raise ValueError(f"the retargeting has {current.num_frames} frames, the robot motion {m.num_frames}")
+        gap = tangent_diff(m.qpos, current.qpos)
+        damped = self.share + mu * np.eye(self.share.shape[1])
         extra = (1.0 + mu) * np.linalg.solve(damped, gap[..., None])[..., 0] - gap
-        qpos = m.qpos.copy()
-        for t in range(T):
-            mujoco.mj_integratePos(model, qpos[t], extra[t], 1.0)
-        return m.with_(qpos=qpos)
+        return m.with_(qpos=apply_step(m.qpos, extra))
 
 
-def tracking_hessians(motion: RobotMotion, robot: Robot, weights: Weights) -> tuple[np.ndarray, np.ndarray]:
-    """(T, nv, nv) Gauss-Newton Hessians of the tracked terms at every frame of ``motion``: the
-    free-feet stage's (keypoints, limb directions, posture) and the pinned stage's (the same plus
-    the corners of the soles planted in ``meta["contacts"]``, at their hard weight)."""
+def tracking_hessians(motion: RobotMotion, spec: ProblemSpec, weights: Weights) -> tuple[np.ndarray, np.ndarray]:
+    """(T, nv, nv) Gauss-Newton Hessians of the tracked terms of the problem ``spec`` at every
+    frame of ``motion``: the free-feet stage's (keypoints, limb directions, posture) and the pinned
+    stage's (the same plus the corners of the soles planted in ``meta["contacts"]``, at their hard
+    weight)."""
     from motion2robot.retarget.terms import contact_xy
 
-    spec = build_spec(robot)
+    robot = spec.robot
     model, data = robot.model, robot.new_data()
     nv, L, T = model.nv, spec.length, motion.num_frames
     sites = np.asarray(robot.keypoint_sites)
@@ -120,10 +113,11 @@ def attenuation(motion: RobotMotion, robot: Robot, options, tracked_legs: bool =
     (a ``steps`` result, whose root and legs the walking pattern lays rather than the solve):
     those coordinates pass as they are (G = I there)."""
     weights = rate_weights(options.weights, motion.fps)
-    free, pinned = tracking_hessians(motion, robot, weights)
+    spec = build_spec(robot)
+    free, pinned = tracking_hessians(motion, spec, weights)
     nv = free.shape[1]
     sv2 = np.ones(nv)
-    sv2[:3] = 1.0 / build_spec(robot).length ** 2  # the solver's scaling of the root translation
+    sv2[:3] = 1.0 / spec.length ** 2  # the solver's scaling of the root translation
     D = np.diag((4.0 * weights.velocity + 16.0 * weights.acceleration) * sv2 + weights.damping)
     n_free, n_pinned = options.iterations
     left_free = np.linalg.matrix_power(np.linalg.solve(free + D, np.broadcast_to(D, free.shape)), n_free)
@@ -134,4 +128,4 @@ def attenuation(motion: RobotMotion, robot: Robot, options, tracked_legs: bool =
         share[:, laid, :] = 0.0
         share[:, :, laid] = 0.0
         share[:, laid, laid] = 1.0  # (i, i) for every laid coordinate i
-    return Attenuation(motion, share, robot.model)
+    return Attenuation(motion, share)

@@ -3,7 +3,7 @@ retargeting is the robot motion it was made from."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -81,17 +81,17 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         q = solve(h)
         err = hinge_rms(q, motion)
         errors.append(err)
+        overshot = aim is not None and err > OVERSHOOT * best[0]
         if err < best[0]:
             best = (err, h, q)
-        elif aim is not None and err > OVERSHOOT * best[0] and best[2] is not None:
-            mu *= MU_GROWTH  # it overshot: from the best again, aimed less far
-            h, q, xs, fs, since = best[1], best[2], [], [], len(errors)
         if err <= tolerance or not np.isfinite(err):
             break
-        if len(errors) - since > STALL_ROUNDS and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]):
-            if aim is None or mu * MU_GROWTH > MU_LAST:
-                break
-            mu *= MU_GROWTH  # stalled: from the best again, aimed less far (plainer rounds)
+        stalled = (not overshot and len(errors) - since > STALL_ROUNDS
+                   and min(errors[-STALL_ROUNDS:]) > (1.0 - STALL_GAIN) * min(errors[:-STALL_ROUNDS]))
+        if stalled and (aim is None or mu * MU_GROWTH > MU_LAST):
+            break
+        if overshot or stalled:  # from the best again, aimed less far (plainer rounds)
+            mu *= MU_GROWTH
             h, q, xs, fs, since = best[1], best[2], [], [], len(errors)
         # compared at the scale this solve computed from h's bone lengths: the fixed point is in
         # the robot's space (keypoints equal), not at the original's scale
@@ -115,13 +115,13 @@ def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[H
 
     from motion2robot.motion.ops import resample
     from motion2robot.retarget.api import RetargetOptions, solve_legs
+    from motion2robot.retarget.executable import legs_of
     from motion2robot.retarget.tempo import stretch
 
     opt = options or RetargetOptions()
     inner = replace(opt, fps=None)
     k = float(motion.meta.get("tempo") or 1.0)
-    fallback = motion.meta.get("fallback")
-    legs = "steps" if isinstance(fallback, Mapping) and fallback.get("mode") == "steps" else "whole"
+    legs = "steps" if legs_of(motion) == "steps" else "whole"
 
     def solve(h: HumanMotion) -> RobotMotion:
         if opt.fps is not None and abs(opt.fps - h.fps) > 1e-9:

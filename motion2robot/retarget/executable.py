@@ -33,7 +33,7 @@ chosen attempt passed (``executable``). When no attempt passes, the one failing 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -175,6 +175,13 @@ def _glides(share: float) -> str | None:
         return None
     return (f"the human's steps would keep {100 * share:.0f} % of their length (the robot stepping in place): "
             "they glide rather than step, and the stance is nearer")
+
+
+def legs_of(motion: RobotMotion) -> str:
+    """The legs mode ``motion`` was made with: its ``meta["fallback"]["mode"]``, or "whole" (no
+    fallback: the whole body)."""
+    fallback = motion.meta.get("fallback")
+    return str(fallback["mode"]) if isinstance(fallback, Mapping) and fallback.get("mode") else "whole"
 
 
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
