@@ -4,11 +4,11 @@ expands ../shared/motions).
 Per clip, prints:
 - idempotence: RMS (rad, over frames and hinges) between the robot motion of ``human`` and the
   default retargeting (tempo and legs judged by ``check``) of ``human'``; ``direct`` is the same
-  figure for the robot's keypoints mapped back without the target correction (round 1 of
-  :func:`~motion2robot.projection.refine`), ``same`` for the ``human'`` returned, retargeted at
-  the tempo and legs of ``human``'s robot motion (the correction's own figure, its best round:
-  the default retargeting may pick another legs mode or tempo for ``human'``), ``rounds`` how
-  many correction rounds ran;
+  figure for the robot's keypoints mapped back without the target correction (retargeted at the
+  correction's tempo and legs), ``same`` for the ``human'`` returned, retargeted at the tempo and
+  legs of ``human``'s robot motion (the correction's own figure, its best round: the default
+  retargeting may pick another legs mode or tempo for ``human'``), ``rounds`` how many correction
+  rounds ran (against the solves alone + against the whole retargeting);
   "tempo differs" when the policy picked another tempo for ``human'`` (motions of different
   lengths);
 - keypoints: mean distance (mm, robot scale) between the robot's keypoints in the two robot
@@ -35,7 +35,7 @@ import numpy as np
 
 from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.motion.human import SMPL22
-from motion2robot.projection import ROUNDS, TOLERANCE, hinge_rms, project, robot_points
+from motion2robot.projection import ROUNDS, TOLERANCE, chosen_solve, hinge_rms, project, robot_points
 from motion2robot.retarget.api import RetargetOptions, solve_legs
 from motion2robot.retarget.executable import legs_of
 from motion2robot.retarget.tempo import stretch
@@ -83,7 +83,7 @@ def main() -> int:
         return 2
     robot = load_robot(args.robot)
     rows = []
-    print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'same':>7s} {'rnds':>4s} {'legs':>6s} "
+    print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'same':>7s} {'rnds':>5s} {'legs':>6s} "
           f"{'noise':>7s} {'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
     for name, human in readable_clips(args.motions, args.limit):
@@ -100,8 +100,9 @@ def main() -> int:
         noise = sensitivity(p, robot)
         jd = p.joint_distance
         worst = max(jd, key=jd.get)
-        row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": p.rounds[0], "same": min(p.rounds),
-               "rounds": len(p.rounds),
+        direct = hinge_rms(p.robot_motion, chosen_solve(p.robot_motion, robot, None)(p.direct))
+        row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": direct, "same": min(p.rounds),
+               "rounds": f"{len(p.solver_rounds)}+{len(p.rounds)}",
                "noise": noise,
                "legs": legs_of(p.robot_motion),
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),
@@ -111,7 +112,7 @@ def main() -> int:
                "joint_cm": {k: 100 * v for k, v in jd.items()}}
         rows.append(row)
         idem = f"{rms:9.4f}" if np.isfinite(rms) else f"{'tempo differs':>9s}"
-        print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['same']:7.4f} {row['rounds']:4d} {row['legs']:>6s} "
+        print(f"{name[:44]:44s} {idem} {gap:6.2f} {row['direct']:7.4f} {row['same']:7.4f} {row['rounds']:>5s} {row['legs']:>6s} "
               f"{noise:7.4f} {_verdict(row['before']):>10s} "
               f"{_verdict(row['after']):>5s} {row['dist_cm']:7.1f} {worst:>14s} {row['worst_cm']:5.1f} {dt:6.1f}",
               flush=True)

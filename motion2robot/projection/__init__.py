@@ -38,8 +38,14 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    (its few block-Jacobi iterations, damped by the temporal terms: a fifth to two thirds on
    weakly held joints such as the head tilt and the elbows), so each round is aimed past q0 by
    the inverse of that share (:mod:`~.attenuation`: P(aim) instead of P(q0)), damped further
-   when a round overshoots or the rounds stall. :attr:`Projection.direct` keeps steps 1-4 alone
-   (what the viewer and the report draw).
+   when a round overshoots or the rounds stall. The rounds run in two phases: first against the
+   retargeting cut after its solves (:func:`solver_stages`: R without the servo rounds, joint
+   smoothing, ZMP stage and root pass), then against the whole retargeting from where the first
+   phase ended. The later stages pass on a motion they made almost as it is (0.0002 rad on an
+   MDM throw), but they are filters with thresholds (a row over its acceleration target is
+   smoothed in every joint), which a solve's small error crosses and no round can aim through;
+   with the solves on q0 first they mostly stay off. :attr:`Projection.direct` keeps steps 1-4
+   alone (what the viewer and the report draw).
 
 ``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
 :attr:`Projection.positions` gives it in the input's own axes and units (for arrays and tensors:
@@ -55,7 +61,16 @@ import numpy as np
 
 from motion2robot.motion.human import SMPL22, HumanMotion
 from motion2robot.projection.attenuation import Attenuation, attenuation
-from motion2robot.projection.correction import MEMORY, ROUNDS, TOLERANCE, chosen_solve, hinge_rms, refine
+from motion2robot.projection.correction import (
+    MEMORY,
+    ROUNDS,
+    SOLVER_TOLERANCE,
+    TOLERANCE,
+    chosen_solve,
+    hinge_rms,
+    refine,
+    solver_stages,
+)
 from motion2robot.projection.inputs import MotionArrayError, as_human
 from motion2robot.projection.mapping import project_motion, robot_points
 from motion2robot.projection.maths import (
@@ -70,9 +85,31 @@ from motion2robot.projection.maths import (
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
-__all__ = ["MEMORY", "ROUNDS", "TOLERANCE", "Attenuation", "MotionArrayError", "Projection", "as_human", "attenuation",
-           "chosen_solve", "fill_torso", "from_canonical", "hinge_rms", "human_torso", "joint_distance", "project", "project_motion", "refine",
-           "robot_frames", "robot_points", "torso_rotations", "unscale"]
+__all__ = [
+    "MEMORY",
+    "ROUNDS",
+    "TOLERANCE",
+    "Attenuation",
+    "MotionArrayError",
+    "Projection",
+    "as_human",
+    "attenuation",
+    "SOLVER_TOLERANCE",
+    "chosen_solve",
+    "fill_torso",
+    "from_canonical",
+    "hinge_rms",
+    "human_torso",
+    "joint_distance",
+    "project",
+    "project_motion",
+    "refine",
+    "robot_frames",
+    "robot_points",
+    "solver_stages",
+    "torso_rotations",
+    "unscale",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,6 +127,8 @@ class Projection:
     direct: the robot's keypoints mapped back without the target correction (steps 1-4).
     rounds: the hinge RMS (rad) between the robot motion and the retargeting of each round's
         ``human'`` (the smallest is ``human``'s, the best round's; see :func:`refine`).
+    solver_rounds: the same for the first phase of the correction, against the retargeting's
+        solves alone (:func:`solver_stages`: the pipeline cut before its servo rounds).
     """
 
     human: HumanMotion
@@ -100,6 +139,7 @@ class Projection:
     positions: np.ndarray
     direct: HumanMotion
     rounds: tuple[float, ...] = ()
+    solver_rounds: tuple[float, ...] = ()
 
     @property
     def idempotence_rms(self) -> float | None:
@@ -161,7 +201,8 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     ((T, 22, 3) HumanML3D joints, y up, metres, 20 fps unless ``fps``; (T, 263) features with
     optional ``mean``/``std``; ...). options: RetargetOptions (default: the executable
     retargeting, tempo and legs ``auto``); check_options: the judge's CheckOptions; rounds /
-    tolerance: of the target correction (:func:`refine`; ``rounds=1`` only measures).
+    tolerance: of the target correction (:func:`refine`, each phase at most ``rounds`` rounds;
+    ``rounds=1`` only measures).
     Raises MotionArrayError (a ValueError and UserError) for bad arrays, UserError subclasses for
     motions or robots that cannot be retargeted."""
     from motion2robot.retarget.api import retarget_and_check
@@ -171,9 +212,12 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     rb = robot if isinstance(robot, Robot) else load_robot(robot)
     robot_motion, report = retarget_and_check(human, rb, options, check_options)
     direct = project_motion(robot_motion, rb, human)
-    projected, errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance,
-                               aim=_aim(robot_motion, rb, options))
+    aim = _aim(robot_motion, rb, options)
+    solved, solver_errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, solver_stages(options)),
+                                   rounds, tolerance * SOLVER_TOLERANCE, aim=aim)
+    projected, errors = refine(solved, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance,
+                               aim=aim)
     positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
     return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
                       distance=joint_distance(human.positions, projected.positions), positions=positions,
-                      direct=direct, rounds=errors)
+                      direct=direct, rounds=errors, solver_rounds=solver_errors)

@@ -16,6 +16,9 @@ from motion2robot.robot_motion import RobotMotion
 #: Target of the correction rounds: RMS (rad) over frames and hinges between the robot motions of
 #: the original and of ``human'``.
 TOLERANCE = 1e-3
+#: The first phase (against the solves alone, :func:`solver_stages`) stops at this fraction of
+#: TOLERANCE.
+SOLVER_TOLERANCE = 0.1
 #: Correction rounds at most (each one retargeting at the chosen tempo and legs, no judging).
 ROUNDS = 16
 #: The rounds stop early when the last STALL_ROUNDS rounds lowered the best RMS met before them
@@ -102,6 +105,20 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         xs, fs = xs[-memory - 1:], fs[-memory - 1:]
         h = h.with_(positions=anderson_step(xs, fs).reshape(shape))
     return best[1], tuple(errors)
+
+
+def solver_stages(options: Any) -> Any:
+    """``options`` (RetargetOptions, None = the defaults) with the whole-body pipeline cut after its
+    solves (the free-feet and pinned stages): no servo rounds, joint smoothing, ZMP stage or root
+    pass. The first phase of the target correction aims these at the robot motion: the later
+    stages leave a motion that already passed through them almost as it is (0.0002 rad on an MDM
+    throw), but switch on wherever a solve's small error crosses one of their thresholds."""
+    from dataclasses import replace
+
+    from motion2robot.retarget.api import RetargetOptions
+
+    return replace(options or RetargetOptions(), corrections=0, smoothing=False, dynamic_balance=False,
+                   root_pass=False)
 
 
 def chosen_solve(motion: RobotMotion, robot: Robot, options: Any) -> Callable[[HumanMotion], RobotMotion]:
