@@ -44,8 +44,10 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    phase ended. The later stages pass on a motion they made almost as it is (0.0002 rad on an
    MDM throw), but they are filters with thresholds (a row over its acceleration target is
    smoothed in every joint), which a solve's small error crosses and no round can aim through;
-   with the solves on q0 first they mostly stay off. :attr:`Projection.direct` keeps steps 1-4
-   alone (what the viewer and the report draw).
+   with the solves on q0 first they mostly stay off. (A ``steps`` result's walking pattern has
+   no such stages to cut: its two phases are the same rounds, the second from the first's best
+   with a fresh mixing history.) :attr:`Projection.direct` keeps steps 1-4 alone (what the
+   viewer and the report draw).
 
 ``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
 :attr:`Projection.positions` gives it in the input's own axes and units (for arrays and tensors:
@@ -88,13 +90,13 @@ from motion2robot.robot_motion import RobotMotion
 __all__ = [
     "MEMORY",
     "ROUNDS",
+    "SOLVER_TOLERANCE",
     "TOLERANCE",
     "Attenuation",
     "MotionArrayError",
     "Projection",
     "as_human",
     "attenuation",
-    "SOLVER_TOLERANCE",
     "chosen_solve",
     "fill_torso",
     "from_canonical",

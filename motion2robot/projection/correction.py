@@ -112,7 +112,8 @@ def solver_stages(options: Any) -> Any:
     solves (the free-feet and pinned stages): no servo rounds, joint smoothing, ZMP stage or root
     pass. The first phase of the target correction aims these at the robot motion: the later
     stages leave a motion that already passed through them almost as it is (0.0002 rad on an MDM
-    throw), but switch on wherever a solve's small error crosses one of their thresholds."""
+    throw), but switch on wherever a solve's small error crosses one of their thresholds. The
+    ``steps`` pattern uses none of these stages (the motion it makes is the same with them)."""
     from dataclasses import replace
 
     from motion2robot.retarget.api import RetargetOptions
