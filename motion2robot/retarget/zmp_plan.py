@@ -101,8 +101,9 @@ def cart_table_shift(zmp: np.ndarray, com_z: np.ndarray, planes: np.ndarray, sup
     zmp (T, 2): the trajectory's ZMP (NaN rows are left unconstrained); com_z (T,) CoM heights;
     jerk_time: s, weight of the shift's jerk (jerk x jerk_time^3 weighs like a shift; 0 = not
     charged): with it the CoM's acceleration, and so the ZMP, changes smoothly where the support
-    polygon changes instead of jumping in one frame. A ZMP that already meets every constraint
-    (:func:`inside_planes`) gets no shift without solving the QP: its optimum is then exactly none."""
+    polygon changes instead of jumping in one frame. A ZMP that already meets every constraint as
+    it is (every row's room >= 0) gets no shift without solving the QP: its optimum is then
+    exactly none."""
     T = len(zmp)
     frames, fi, n_x, n_y, rhs = _constraints(zmp, planes, support)
     k = len(fi)
@@ -143,12 +144,6 @@ def _constraints(zmp: np.ndarray, planes: np.ndarray,
     fi, hi = np.nonzero(~((pl[..., 0] == 0.0) & (pl[..., 1] == 0.0)))
     n_x, n_y, b = pl[fi, hi, 0], pl[fi, hi, 1], pl[fi, hi, 2]
     return frames, fi, n_x, n_y, b - n_x * zmp[frames[fi], 0] - n_y * zmp[frames[fi], 1]
-
-
-def inside_planes(zmp: np.ndarray, planes: np.ndarray, support: np.ndarray) -> bool:
-    """Whether the ZMP (T, 2) meets every constraint :func:`cart_table_shift` would put on it as
-    it is (no shift: every row's room is >= 0): then its smallest, smoothest shift is none."""
-    return bool(np.all(_constraints(zmp, planes, support)[4] >= 0.0))
 
 
 def com_boxes(target: np.ndarray, frames: np.ndarray, planes: np.ndarray, tol: float = TRACK_TOLERANCE) -> np.ndarray:
