@@ -1,14 +1,17 @@
 """Footholds for a walking pattern: the human's placements re-laid within the robot's reach.
 
-A human stride scaled to a small robot is still too long for it (op3: the Bandai walk asks for
-0.22 m between the feet, 80 % of its straight leg), and a human sets its feet closer together than
-the robot's hips. :func:`shorten_steps` re-lays the placements step by step: each step keeps the
+:func:`feet_placements` reads where the human's feet stand and point in each contact phase. A
+human stride scaled to a small robot is still too long for it (op3: the Bandai walk asks for 0.22
+m between the feet, 80 % of its straight leg), and a human sets its feet closer together than the
+robot's hips. :func:`shorten_steps` re-lays the placements step by step: each step keeps the
 human's turn and sideways offset, its fore-aft length shrinks by the clip's :func:`step_factor`,
 and a foot set beside the other stays :func:`stance_width` to its side (a wider human step's excess
 shrinks by the same factor). A foot that steps twice in a row is laid from the foot it stands
-beside. Every placement keeps its yaw within the hips' reach. :func:`grounded` gives every lift-off a double support before it (the human's flight phases
-and heel-up frames leave none); :func:`filled` gives a foot in the air at either end of the clip
-its nearest placement. Units: metres, radians, seconds; world frame z up.
+beside. Every placement keeps its yaw within the hips' reach. :func:`grounded` gives every
+lift-off a double support before it (the human's flight phases and heel-up frames leave none);
+:func:`walking_labels` schedules the steps to their fixed point; :func:`filled` gives a foot in the
+air at either end of the clip its nearest placement. Units: metres, radians, seconds; world frame
+z up.
 """
 
 from __future__ import annotations
@@ -20,6 +23,10 @@ from motion2robot.retarget.contact_plan import ContactPlan
 from motion2robot.retarget.contacts import phases, sole_yaw
 from motion2robot.robot.chains import hip_hinges
 from motion2robot.robot.robot import Robot
+
+
+#: Rounds of (widen, ground) :func:`walking_labels` runs at most to reach its fixed point.
+SCHEDULE_ROUNDS = 12
 
 
 class PatternError(SolverError):
@@ -48,22 +55,76 @@ def _steps(labels: np.ndarray) -> list[tuple[int, int, int, tuple[int, int, int]
     return out
 
 
-def _step_axes(soles: np.ndarray, ref: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Forward and left unit vectors of a step: the heading of the placement it steps from (the
-    foot the robot stands on while it swings)."""
-    yaw = _sole_yaw(soles[ref[1], ref[0]])
+def _axes(yaw: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array([np.cos(yaw), np.sin(yaw)]), np.array([-np.sin(yaw), np.cos(yaw)])
+
+
+def _step_yaw(from_yaw: float, to_yaw: float) -> float:
+    """Heading (rad) of a step: midway between the placement it steps from (the foot the robot
+    stands on while it swings) and its own. A walk's feet point out to either side of where it
+    goes (the CMU walk: the left 0.3 rad, the right 0.0), so a step measured in the standing
+    foot's heading alone went sideways by its toe-out and was measured short (the op3 stepped 7
+    cm for a 5 cm reach)."""
+    return from_yaw + 0.5 * _wrap(to_yaw - from_yaw)
+
+
+def _step_axes(soles: np.ndarray, ref: tuple[int, int, int], f: int, a: int) -> tuple[np.ndarray, np.ndarray]:
+    """Forward and left unit vectors of the step of foot ``f`` landing in frame ``a`` from the
+    placement ``ref`` (:func:`_step_yaw`)."""
+    return _axes(_step_yaw(_sole_yaw(soles[ref[1], ref[0]]), _sole_yaw(soles[a, f])))
+
+
+def feet_placements(soles: np.ndarray, labels: np.ndarray, own: np.ndarray, ankles: np.ndarray, toes: np.ndarray,
+                    offsets: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """(T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames from the human's own feet
+    (``ankles``, ``toes``: (T, 2, 2) their scaled horizontal positions, m): per contact phase, the
+    robot's own ankle->toe keypoints point along the human's ankle->toe direction summed over the
+    phase's frames in which the human's foot is down (``own`` (T, 2): its planted frames; the
+    phase's first frame if none), i.e. the sole heads ``turns`` (2,) (rad, the robot's
+    ankle->toe keypoints' heading in its sole's frame) short of it, and its centre is the ankle
+    where the foot lands (the first of those frames: a gliding thrower's foot is laid where it
+    lands, as its steps are measured) plus the robot's ankle->sole-centre ``offsets`` (2, 2) (m,
+    forward and left in the sole's frame) turned to that heading; the sole's layout is ``soles``' (the
+    unpinned solve's placements, :func:`~.contacts.anchor_soles`), at z = 0. A walk's foot that
+    stands still gives exactly where it stands."""
+    out = soles.copy()
+    for f, a, b in phases(labels):
+        frames = a + np.flatnonzero(own[a:b, f]) if own[a:b, f].any() else np.array([a])
+        fwd = (toes[frames, f] - ankles[frames, f]).sum(axis=0)
+        yaw = float(np.arctan2(fwd[1], fwd[0])) - float(turns[f])
+        c, s = np.cos(yaw), np.sin(yaw)
+        centre = ankles[frames[0], f] + np.array([[c, -s], [s, c]]) @ offsets[f]
+        out[a:b, f] = _turned(soles[a, f], centre, yaw)
+        out[a:b, f, :, 2] = 0.0
+    return out
+
+
+def _start(soles: np.ndarray, runs: list) -> tuple[float, float, float] | None:
+    """The stance the clip starts on, when both feet start on the floor: their mean heading (rad),
+    and the left sole's centre from the right's, forward and leftward in that heading (m)."""
+    first = {f: a for f, a, _, ref in runs if ref is None}
+    if len(first) != 2:
+        return None
+    ya, yb = (_sole_yaw(soles[first[f], f]) for f in (0, 1))
+    mean = ya + 0.5 * _wrap(yb - ya)
+    gap = soles[first[0], 0].mean(axis=0)[:2] - soles[first[1], 1].mean(axis=0)[:2]
+    fwd, left = np.array([np.cos(mean), np.sin(mean)]), np.array([-np.sin(mean), np.cos(mean)])
+    return mean, float(gap @ fwd), float(gap @ left)
 
 
 def step_factor(soles: np.ndarray, labels: np.ndarray, longest: float) -> float:
     """The factor (<= 1) that brings the longest step down to ``longest`` (m): a step's length is
     the fore-aft distance, in its heading (:func:`_step_axes`), from the placement before it to
-    its own (``soles`` (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames)."""
-    worst = 0.0
-    for f, a, _, ref in _steps(labels):
+    its own (``soles`` (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames); the
+    stance the clip starts on counts as one (a clip cut mid-stride starts with its feet a stride
+    apart)."""
+    runs = _steps(labels)
+    start = _start(soles, runs)
+    worst = 0.0 if start is None else abs(start[1])
+    for f, a, _, ref in runs:
         if ref is None:
             continue
-        fwd, _ = _step_axes(soles, ref)
+        fwd, _ = _step_axes(soles, ref, f, a)
         gap = soles[a, f].mean(axis=0)[:2] - soles[ref[1], ref[0]].mean(axis=0)[:2]
         worst = max(worst, abs(float(gap @ fwd)))
     return float(min(1.0, longest / max(worst, 1e-9)))
@@ -86,30 +147,37 @@ def _turned(sole: np.ndarray, centre: np.ndarray, yaw: float) -> np.ndarray:
 def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float, max_turn: float,
                   turn_rate: float = np.inf) -> np.ndarray:
     """Placements re-laid step by step (:func:`_steps`), each from the re-laid placement it steps
-    from: the step keeps the human's turn in that placement's frame, its fore-aft length shrinks
+    from: the step keeps the human's turn and, in its heading (:func:`_step_yaw`), its sideways
+    offset, while its fore-aft length shrinks
     by ``k``, a foot set beside the other lands at least ``width`` (m) to its own side of it (the
     robot's own stance width: its hip rolls cannot hold the body over a foot set inside the hip,
     as a human's narrower placements would ask) and what the human's step reaches sideways beyond
     that shrinks by ``k`` too (op3: a thrower's side step of 0.19 m between the feet held the swing
     ankle's roll at its limit, a kink of 400-800 rad/s^2 at 100 fps), and a foot turns at
     most ``max_turn`` (rad) from the one it steps from (the hip yaws' range; the human's heading
-    is caught up on the next steps). The feet the clip starts on are turned to within
-    ``max_turn / 2`` of their mean heading; a foot turns from its own last placement by at most
-    ``turn_rate`` (rad per frame of its swing: what its hip yaw can turn it by in the air).
+    is caught up on the next steps). The feet the clip starts on (both down in its first phase)
+    stand about their midpoint as one such step apart, in their mean heading and turned to within
+    ``max_turn / 2`` of it (a clip cut mid-stride, laid as the human stood, started the op3 a
+    human stride apart: 18 cm, its knee at 5x its torque); a foot turns from its own last
+    placement by at most ``turn_rate`` (rad per frame of its swing: what its hip yaw can turn it
+    by in the air).
     ``soles``: (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames."""
     out = soles.copy()
     runs = _steps(labels)
-    first = [(f, a, b) for f, a, b, ref in runs if ref is None]
-    if len(first) == 2:
-        ya, yb = (_sole_yaw(soles[a, f]) for f, a, _ in first)
-        mean = ya + 0.5 * _wrap(yb - ya)
+    start = _start(soles, runs)
+    if start is not None:  # the feet the clip starts on: a stance of the robot's, about their midpoint
+        mean, fore, lat = start
+        fwd, left = np.array([np.cos(mean), np.sin(mean)]), np.array([-np.sin(mean), np.cos(mean)])
+        half = 0.5 * (k * fore * fwd + (width + k * max(lat - width, 0.0)) * left)
+        first = [(f, a, b) for f, a, b, ref in runs if ref is None]
+        mid = 0.5 * sum(soles[a, f].mean(axis=0)[:2] for f, a, _ in first)
         for f, a, b in first:
             yaw = mean + float(np.clip(_wrap(_sole_yaw(soles[a, f]) - mean), -max_turn / 2, max_turn / 2))
-            out[a:b, f] = _turned(soles[a, f], soles[a, f].mean(axis=0)[:2], yaw)
+            out[a:b, f] = _turned(soles[a, f], mid + (half if f == 0 else -half), yaw)
     for f, a, b, ref in runs:
         if ref is None:
             continue
-        fwd, left = _step_axes(soles, ref)                     # the human's step, in its frame
+        fwd, left = _step_axes(soles, ref, f, a)               # the human's step, in its frame
         gap = soles[a, f].mean(axis=0)[:2] - soles[ref[1], ref[0]].mean(axis=0)[:2]
         fore, lat = float(gap @ fwd), float(gap @ left)
         if ref[0] != f:
@@ -119,13 +187,13 @@ def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float,
             lat *= k
         base = out[ref[1], ref[0]]
         yaw_ref = _sole_yaw(base)
-        fwd, left = _step_axes(out, ref)                       # laid from the re-laid placement
         yaw = yaw_ref + float(np.clip(_wrap(_sole_yaw(soles[a, f]) - yaw_ref), -max_turn, max_turn))
         own = np.flatnonzero(labels[:a, f])
         if len(own) and np.isfinite(turn_rate):  # the turn its swing has time for
             last = _sole_yaw(out[own[-1], f])
             room = turn_rate * (a - 1 - own[-1])
             yaw = last + float(np.clip(_wrap(yaw - last), -room, room))
+        fwd, left = _axes(_step_yaw(yaw_ref, yaw))             # laid from the re-laid placement
         out[a:b, f] = _turned(soles[a, f], base.mean(axis=0)[:2] + k * fore * fwd + lat * left, yaw)
     return out
 
@@ -213,20 +281,25 @@ def walking_labels(labels: np.ndarray, fps: float, overlap_s: float, min_swing_s
     """(T, 2) contact labels of a walking pattern from the human's (at ``fps``): every swing
     widened to ``min_swing_s`` (:func:`widen_swings`), then to ``long_swing_s`` where the foot's
     contact phases around it keep ``overlap_s`` (quick footwork keeps its short stances), every
-    lift-off after a double support of ``overlap_s`` (:func:`grounded`), then all again: a swing
-    beside a flight phase has no room (the other foot is in the air) until the flight is grounded
-    (a GMD clip at 100 fps kept a 0.05 s swing there: 600 rad/s^2 in a knee), and widening it can
-    take the double support before the other foot's lift-off, which the second grounding gives
-    back."""
+    lift-off after a double support of ``overlap_s`` (:func:`grounded`), then all again until
+    nothing changes (at most SCHEDULE_ROUNDS times): a swing beside a flight phase has no room
+    (the other foot is in the air) until the flight is grounded (a GMD clip at 100 fps kept a
+    0.05 s swing there: 600 rad/s^2 in a knee), and widening it can take the double support before
+    the other foot's lift-off, which the next grounding gives back. Run to its fixed point, the
+    schedule is its own schedule (two rounds left 12 of the 62 dev clips' schedules changing again
+    by 1-11 frames, so a motion walked on them was scheduled anew)."""
     n_swing = int(np.ceil(min_swing_s * fps - 1e-9))
     n_long = int(np.ceil(long_swing_s * fps - 1e-9))
     keep = max(1, int(round(overlap_s * fps)))
     out = labels
-    for _ in range(2):
+    for _ in range(SCHEDULE_ROUNDS):
+        before = out
         out = widen_swings(out, n_swing)
         if n_long > n_swing:
             out = widen_swings(out, n_long, keep)
         out = grounded(out, fps, overlap_s, min_swing_s, long_swing_s)
+        if np.array_equal(out, before):
+            break
     return out
 
 

@@ -15,7 +15,8 @@ then a ZMP-based waist trajectory):
    the floor, and its low-passed dips set a crouch that differed by 3-4 cm between 20 and 100
    fps);
 2. footholds (:mod:`~.footholds`): a double support before every lift-off (runs and jumps are
-   walked; a human walk's heel-up frames leave none), the human's placements re-laid step by step, each step
+   walked; a human walk's heel-up frames leave none), the human's placements (where its ankles
+   stand and its feet point, :func:`placements`) re-laid step by step, each step
    shortened by one factor for the clip so the longest is STEP_REACH of the straight leg, the feet
    at the robot's own stance width, each foot turning no faster than TURN_SPEED of its hip's
    velocity limit allows over its swing; a foot stepping twice in a row laid from the one it
@@ -54,12 +55,19 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from motion2robot.motion.human import HumanMotion
+from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget.constraints import clamp_velocity, support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
 from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted, sole_yaw
-from motion2robot.retarget.footholds import filled, shorten_steps, stance_width, step_factor, walking_labels
+from motion2robot.retarget.footholds import (
+    feet_placements,
+    filled,
+    shorten_steps,
+    stance_width,
+    step_factor,
+    walking_labels,
+)
 from motion2robot.retarget.leg_tracker import LOST, LegTracker, root_height
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.setup import Setup, prepare
@@ -115,8 +123,8 @@ ZMP_ROUNDS = 3
 class Footing:
     """Stage 1 of ``steps`` (:func:`footing`): the setup with the walking labels, the free solve
     ``Q`` (T, nq) with its solver stats and its sole corners (T, 2, 4, 3) m, the leg tracker, the
-    longest step the legs take (m), the factor the human's steps shrink by to it, and the seconds
-    it took (the setup, the solve)."""
+    longest step the legs take (m), the factor the human's steps shrink by to it, the human's
+    placements (T, 2, 4, 3) (:func:`placements`) and the seconds it took (the setup, the solve)."""
 
     setup: Setup
     Q: np.ndarray
@@ -125,6 +133,7 @@ class Footing:
     tracker: LegTracker
     longest: float
     factor: float
+    placed: np.ndarray
     prepare_s: float
     solve_s: float
 
@@ -138,14 +147,46 @@ def footing(human: HumanMotion, robot: Robot, options) -> Footing:
     # the clip's own rate (before any --fps resampling) samples every swing with MIN_SWING_FRAMES
     native = float(human.meta.get("resampled_from_fps") or human.fps)
     min_swing = max(MIN_SWING_S, MIN_SWING_FRAMES / native)
-    setup = replace(setup, labels=native_walking_labels(human, setup, native, min_swing, LONG_SWING_FRAMES / native))
+    labels, own = native_walking_labels(human, setup, native, min_swing, LONG_SWING_FRAMES / native)
+    setup = replace(setup, labels=labels)
     t1 = time.perf_counter()
     Q, free = free_solve(setup)
     corners = setup.points(Q)[1]
     tracker = LegTracker(robot)
     longest = STEP_REACH * float(tracker.straight_reach().min())
-    k = step_factor(anchor_soles(corners, setup.labels), setup.labels, longest)
-    return Footing(setup, Q, free, corners, tracker, longest, k, t1 - t0, time.perf_counter() - t1)
+    placed = placements(setup, anchor_soles(corners, setup.labels), own)
+    k = step_factor(placed, setup.labels, longest)
+    return Footing(setup, Q, free, corners, tracker, longest, k, placed, t1 - t0, time.perf_counter() - t1)
+
+
+def placements(setup: Setup, anchored: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """(T, 2, 4, 3) the human's placements in the walking labels' contact frames: from the human's
+    own feet (:func:`~.footholds.feet_placements`: where its ankles stand, the robot's ankle and
+    toe keypoints along its ankle->toe directions; ``own`` its planted frames) when the robot
+    tracks both ankles and toes, else ``anchored`` (the unpinned solve's soles). Not the unpinned
+    solve's soles alone: it follows a foot's heading weakly (op3, the Bandai walk: a toe target
+    turned 0.1 rad turned the sole 0.005 rad), so the pattern laid the solve's compromise rather
+    than where the human's feet pointed. The keypoints, not the sole's axis: the robot's feet
+    mapped back onto the human (:mod:`~motion2robot.projection`) point where its keypoints do
+    (op3: its toe site sits 0.18 rad outwards of the sole's axis, seen from the ankle), so the
+    pattern lays them where they stood (and a person's feet, turned out 0.35 rad on the dev
+    clips' median, are laid turned out by the rest)."""
+    names = list(setup.problem.spec.kp_names)
+    need = [f"{s}_{j}" for s in ("left", "right") for j in ("ankle", "foot")]
+    if not all(n in names for n in need):
+        return anchored
+    kp0, corners0 = setup.points(setup.robot.nominal_qpos[None])[:2]
+    offsets, turns = np.zeros((2, 2)), np.zeros(2)
+    for f, side in enumerate(("left", "right")):
+        yaw = float(sole_yaw(corners0[0, f]))
+        local = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]])  # world -> sole frame
+        ankle = kp0[0, names.index(f"{side}_ankle"), :2]
+        offsets[f] = local @ (corners0[0, f, :, :2].mean(axis=0) - ankle)
+        toe = local @ (kp0[0, names.index(f"{side}_foot"), :2] - ankle)
+        turns[f] = np.arctan2(toe[1], toe[0])
+    ankles = setup.kp[:, [KP["left_ankle"], KP["right_ankle"]], :2]
+    toes = setup.kp[:, [KP["left_foot"], KP["right_foot"]], :2]
+    return feet_placements(anchored, setup.labels, own, ankles, toes, offsets, turns)
 
 
 def steps(human: HumanMotion, robot: Robot, options, first: Footing | None = None) -> RobotMotion:
@@ -160,7 +201,7 @@ def steps(human: HumanMotion, robot: Robot, options, first: Footing | None = Non
     legs = foot_ancestor_mask(robot).any(axis=1)
     turn_rate = TURN_SPEED * float(robot.velocity_limit[legs].min()) * (1.0 - 2.0 * SWING_SHAPE[0]) / setup.fps
     plan = plan_contacts(setup, free_corners, cap_swing_speed=False,
-                         place=lambda soles, labels: shorten_steps(soles, labels, k, width, MAX_TURN, turn_rate),
+                         place=lambda soles, labels: shorten_steps(f.placed, labels, k, width, MAX_TURN, turn_rate),
                          swing_shape=SWING_SHAPE)
     Q, walked, figures = walk_pattern(setup, plan, Q, tracker)
     # the free solve's arms kept clear of the human's legs, not of the regenerated ones
@@ -178,24 +219,29 @@ def steps(human: HumanMotion, robot: Robot, options, first: Footing | None = Non
     along = setup.kp.copy()
     along[..., :2] += (Q[:, :2] - setup.kp[:, 0, :2])[:, None, :]
     motion = robot_motion(replace(setup, kp=along), walked, Q, pts, stages, False)
+    # the schedule the pattern walked, before a foot in the air at an end of the clip was stood at
+    # its nearest placement (``contacts``): a human motion with these labels is scheduled the same
     return motion.with_(meta={**motion.meta, "human_root_xy": setup.kp[:, 0, :2].tolist(),
+                              "schedule": setup.labels.astype(int).tolist(),
                               "solver": {**motion.meta["solver"], "steps": figures}})
 
 
 def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_swing: float,
-                          long_swing: float = 0.0) -> np.ndarray:
+                          long_swing: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(T, 2) walking labels (:func:`~.footholds.walking_labels`) of ``human`` at its output rate,
-    scheduled at the clip's ``native`` rate: a clip resampled finer (``--fps``) has its contacts
-    detected and its swings widened and grounded on the native frames, then each output frame
-    takes the nearest native frame's, so every rate walks the same schedule in seconds (detected
-    at 100 fps, a 20 fps GMD clip's contacts flickered into a 0.05 s hop beside a flight, and a
-    60 fps CMU dance's into 0.04 s swings: 3-5x the native peaks)."""
+    and the (T, 2) planted frames they were made from, both scheduled at the clip's ``native``
+    rate: a clip resampled finer (``--fps``) has its contacts detected and its swings widened and
+    grounded on the native frames, then each output frame takes the nearest native frame's, so
+    every rate walks the same schedule in seconds (detected at 100 fps, a 20 fps GMD clip's
+    contacts flickered into a 0.05 s hop beside a flight, and a 60 fps CMU dance's into 0.04 s
+    swings: 3-5x the native peaks) and places its feet from the same frames."""
     if not setup.opt.contacts or abs(native - setup.fps) < 1e-9:
-        return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing, long_swing)
+        return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing, long_swing), setup.labels
     coarse = resample(human, native)
-    labels = walking_labels(planted(contact_labels(coarse)[0], coarse), native, OVERLAP_S, min_swing, long_swing)
-    nearest = np.rint(np.arange(len(setup.labels)) * native / setup.fps).astype(int)
-    return labels[np.clip(nearest, 0, len(labels) - 1)]
+    own = planted(contact_labels(coarse)[0], coarse)
+    labels = walking_labels(own, native, OVERLAP_S, min_swing, long_swing)
+    nearest = np.clip(np.rint(np.arange(len(setup.labels)) * native / setup.fps).astype(int), 0, len(labels) - 1)
+    return labels[nearest], own[nearest]
 
 
 def feet_heading(corners: np.ndarray, fps: float) -> np.ndarray:
