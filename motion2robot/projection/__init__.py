@@ -25,7 +25,9 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    torso. A filled joint off the torso (a drafted robot without, say, wrists) keeps its offset
    from its parent, turned with the torso the same way;
 4. **contacts**: ``human'.contacts`` are the contact labels the robot motion was made with, so
-   ``human'`` says where the robot's soles were planted;
+   ``human'`` says where the robot's soles were planted (a ``steps`` result's: the schedule its
+   walking pattern walked, ``meta["schedule"]``, in which a foot the clip starts or ends in the
+   air is in the air, as in the human's, though the robot stands it at its nearest placement);
 5. **target correction** (:func:`refine`): the retargeter's optimum for targets it can reach
    exactly is not exactly the pose that reaches them (its regularisation, temporal and
    orientation terms pull it away, a few mm at the robot's scale), and the scale it computes from
@@ -179,7 +181,12 @@ class Projection:
 
 def _aim(motion: RobotMotion, robot: Robot, options: Any):
     """The correction rounds' aim (:meth:`Attenuation.aim`), the attenuation computed at the first
-    round that needs it."""
+    round that needs it (for a ``steps`` result, of the free-feet stage alone: the walking pattern
+    takes the upper body from it; with the pinned stage's iterations in the model, 8 walks and
+    throws on ``steps`` ended at a median 0.0025 rad instead of 0.0015, a HumanML3D walk at 0.0041
+    instead of 0.0014)."""
+    from dataclasses import replace
+
     from motion2robot.retarget.api import RetargetOptions
     from motion2robot.retarget.executable import legs_of
 
@@ -187,8 +194,11 @@ def _aim(motion: RobotMotion, robot: Robot, options: Any):
 
     def aim(current: RobotMotion, mu: float) -> RobotMotion:
         if not made:
+            opt = options or RetargetOptions()
             tracked = legs_of(motion) != "steps"
-            made.append(attenuation(motion, robot, options or RetargetOptions(), tracked_legs=tracked))
+            if not tracked:  # the walking pattern runs the free-feet stage alone
+                opt = replace(opt, iterations=(opt.iterations[0], 0))
+            made.append(attenuation(motion, robot, opt, tracked_legs=tracked))
         return made[0].aim(current, mu)
 
     return aim

@@ -59,7 +59,9 @@ def project_motion(motion: RobotMotion, robot: Robot, original: HumanMotion) -> 
     orig = np.asarray(original.positions)
     first = unscale(pts, mapped, scale, orig)  # the mapped joints do not depend on the fill's values
     out = unscale(pts, mapped, scale, fill_torso(orig, first, up, mapped))
-    labels = motion.meta.get("contacts")
+    labels = motion.meta.get("schedule")  # a walking pattern's: the labels that schedule it again
+    if np.shape(labels) != (motion.num_frames, 2):
+        labels = motion.meta.get("contacts")
     contacts = None
     if labels is not None and np.shape(labels) == (motion.num_frames, 2):
         contacts = np.asarray(labels, dtype=bool)[np.clip(np.rint(u).astype(int), 0, motion.num_frames - 1)]
