@@ -331,3 +331,13 @@ def test_the_walking_schedule_is_its_own_schedule(clip):
     once = walking_labels(labels, *args)
     assert not np.array_equal(once, labels)
     np.testing.assert_array_equal(walking_labels(once, *args), once)
+
+
+def test_steps_just_over_the_reach_are_kept_with_a_slack():
+    """A walk whose longest step is 3 % over the reach (a pattern's own placements, the feet
+    pushed apart where they would meet) keeps its steps with a 5 % slack; one 10 % over is
+    shortened to the reach as without it."""
+    soles, labels = _walk(stride=0.4, width=0.04)             # steps of 0.2 m
+    assert step_factor(soles, labels, 0.2 / 1.03) == pytest.approx(1 / 1.03)
+    assert step_factor(soles, labels, 0.2 / 1.03, slack=0.05) == 1.0
+    assert step_factor(soles, labels, 0.2 / 1.1, slack=0.05) == pytest.approx(1 / 1.1)

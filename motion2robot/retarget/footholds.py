@@ -112,12 +112,14 @@ def _start(soles: np.ndarray, runs: list) -> tuple[float, float, float] | None:
     return mean, float(gap @ fwd), float(gap @ left)
 
 
-def step_factor(soles: np.ndarray, labels: np.ndarray, longest: float) -> float:
+def step_factor(soles: np.ndarray, labels: np.ndarray, longest: float, slack: float = 0.0) -> float:
     """The factor (<= 1) that brings the longest step down to ``longest`` (m): a step's length is
     the fore-aft distance, in its heading (:func:`_step_axes`), from the placement before it to
     its own (``soles`` (T, 2, 4, 3) placements in the ``labels`` (T, 2) contact frames); the
     stance the clip starts on counts as one (a clip cut mid-stride starts with its feet a stride
-    apart)."""
+    apart). Steps up to ``slack`` (a fraction) longer than ``longest`` are kept as they are
+    (1.0): a walking pattern's own placements, where the feet were pushed apart so as not to
+    meet, measure a little over the reach it laid them at."""
     runs = _steps(labels)
     start = _start(soles, runs)
     worst = 0.0 if start is None else abs(start[1])
@@ -127,7 +129,9 @@ def step_factor(soles: np.ndarray, labels: np.ndarray, longest: float) -> float:
         fwd, _ = _step_axes(soles, ref, f, a)
         gap = soles[a, f].mean(axis=0)[:2] - soles[ref[1], ref[0]].mean(axis=0)[:2]
         worst = max(worst, abs(float(gap @ fwd)))
-    return float(min(1.0, longest / max(worst, 1e-9)))
+    if worst <= longest * (1.0 + slack):
+        return 1.0
+    return float(longest / max(worst, 1e-9))
 
 
 def _wrap(a: float) -> float:
