@@ -113,7 +113,8 @@ def solver_stages(options: Any) -> Any:
     pass. The first phase of the target correction aims these at the robot motion: the later
     stages leave a motion that already passed through them almost as it is (0.0002 rad on an MDM
     throw), but switch on wherever a solve's small error crosses one of their thresholds. The
-    ``steps`` pattern uses none of these stages (the motion it makes is the same with them)."""
+    ``steps`` pattern runs none of these but the smoothing (of the upper body it takes from the
+    free solve: without it, only the exact velocity clamp)."""
     from dataclasses import replace
 
     from motion2robot.retarget.api import RetargetOptions

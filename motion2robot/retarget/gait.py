@@ -275,10 +275,14 @@ def walk_pattern(setup: Setup, plan: ContactPlan, Q: np.ndarray,
     upper = np.flatnonzero(~foot_ancestor_mask(robot).any(axis=1))
     if len(upper):
         # the solve's per-frame noise filtered as the whole-body pipeline's last stage does
-        # (the same cutoff in Hz at any rate), then rounded off to what the servos can follow
-        lo, hi = robot.lower[upper], robot.upper[upper]
-        out[:, 7 + upper] = smooth_hinges(low_pass(Q[:, 7 + upper], fps, lower=lo, upper=hi), setup.servo[0][upper],
-                                          setup.servo[1][upper], fps, robot.velocity_limit[upper], lo, hi)
+        # (the same cutoff in Hz at any rate), then rounded off to what the servos can follow;
+        # without smoothing (RetargetOptions.smoothing off), only the exact velocity clamp
+        lo, hi, vmax = robot.lower[upper], robot.upper[upper], robot.velocity_limit[upper]
+        if setup.opt.smoothing:
+            out[:, 7 + upper] = smooth_hinges(low_pass(Q[:, 7 + upper], fps, lower=lo, upper=hi),
+                                              setup.servo[0][upper], setup.servo[1][upper], fps, vmax, lo, hi)
+        else:
+            out[:, 7 + upper] = np.clip(clamp_velocity(Q[:, 7 + upper], vmax, fps), lo, hi)
     # the CoM plan: near the feet's midpoint, its cart-table ZMP inside every frame's support polygon
     com_free = setup.points(Q)[2]
     com_ref = low_pass(corners[..., :2].mean(axis=(1, 2)), fps, COM_CUTOFF_HZ)   # between the feet
