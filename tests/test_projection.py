@@ -323,3 +323,21 @@ def test_feature_input_comes_back_as_humanml3d_joints() -> None:
     assert np.abs(from_canonical(human.meta["canonical_transform"], human.positions) - joints).max() < 1e-4
     with pytest.raises(MotionArrayError, match="one sample at a time"):
         as_human(feats[None].repeat(2, 0), layout="humanml3d_vecs")
+
+
+@requires_shared
+def test_a_slowed_walk_comes_back_on_the_same_schedule() -> None:
+    """The CMU walk walks at x1.25: its schedule is made on the clip's own frames, so human'
+    (whose contacts are at those frames) is scheduled the same at x1.25 (made on the slowed
+    frames, the edges came back a frame off: 0.0019 rad), and its retargeting at that tempo and
+    legs is within TOLERANCE of the robot motion (measured 0.0001)."""
+    from motion2robot.motion import read_motion
+    from motion2robot.retarget import RetargetOptions, retarget
+
+    robot = _robot()
+    human = read_motion(MOTIONS / "bvh" / "cmu_cc_002_01_walk.bvh")[0]
+    p = project(human, robot)
+    assert p.robot_motion.meta["fallback"]["mode"] == "steps" and p.robot_motion.meta["tempo"] == 1.25
+    again = retarget(p.human, robot, RetargetOptions(tempo=1.25, legs="steps"))
+    np.testing.assert_array_equal(np.asarray(again.meta["schedule"]), np.asarray(p.robot_motion.meta["schedule"]))
+    assert hinge_rms(p.robot_motion, again) <= TOLERANCE

@@ -220,3 +220,19 @@ def test_without_smoothing_the_pattern_keeps_the_free_solve_s_upper_body_within_
     # the free solve's own hinges where the clamp leaves them (the arms pushed clear of the legs aside)
     near = np.abs(raw.qpos[:, upper] - first.Q[:, upper])
     assert np.median(near) < 1e-9
+
+
+@requires_shared
+def test_a_slowed_clip_is_scheduled_on_its_own_frames(op3):
+    """At x1.6 the schedule is made on the clip's own frames (every 1.6 frames of the slowed
+    motion) and each slowed frame takes its nearest own frame's labels, so its phase edges are
+    edges a motion at the clip's own frames can carry (a projected ``human'``'s contacts)."""
+    from motion2robot.retarget.gait import footing
+    from motion2robot.retarget.tempo import stretch
+
+    human = read_motion(MOTIONS / "bvh" / "gen_gmd_ik_anim0.bvh")[0]
+    labels = footing(stretch(human, 1.6), op3, RetargetOptions()).setup.labels
+    own = np.rint(np.arange(len(labels)) / 1.6).astype(int)
+    for i in np.unique(own):
+        assert (labels[own == i] == labels[own == i][0]).all()
+    assert (~labels).any(axis=0).all()   # both feet step
