@@ -244,7 +244,7 @@ def native_walking_labels(human: HumanMotion, setup: Setup, native: float, min_s
     60 fps CMU dance's into 0.04 s swings: 3-5x the native peaks) and places its feet from the
     same frames; and a slowed clip's schedule is one its own frames can carry (the contacts of its
     ``human'``, :mod:`~motion2robot.projection`, at the human's frames: scheduled on the slowed
-    frames, their edges came back a frame off, 0.0013-0.0023 rad on 5 slowed walks and dances,
+    frames, their edges came back a frame off, 0.0013-0.0023 rad on 6 slowed walks and dances,
     0.0001-0.0017 since)."""
     if not setup.opt.contacts or abs(native - setup.fps) < 1e-9:
         return walking_labels(setup.labels, setup.fps, OVERLAP_S, min_swing, long_swing), setup.labels
