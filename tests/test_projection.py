@@ -201,7 +201,7 @@ def test_the_correction_aims_the_solves_first() -> None:
 def test_a_walk_on_steps_is_corrected_through_the_steps_pattern() -> None:
     """A GMD walk goes on ``steps``: its human' is corrected against the ``steps`` pattern that
     made the robot motion (against the whole body its rounds stalled at 0.043 rad), so the default
-    retargeting of human' walks the same footsteps again (measured 0.0009 rad; 0.0019 while the
+    retargeting of human' walks the same footsteps again (measured 0.0002 rad; 0.0019 while the
     pattern laid the unpinned solve's soles, which follow a foot's heading at 5 %; 0.005 with
     plain rounds, 0.033 against the whole body). human' carries the schedule the pattern walked,
     which the pattern schedules the same, and its feet are placed where the robot's stood."""
@@ -220,7 +220,7 @@ def test_a_walk_on_steps_is_corrected_through_the_steps_pattern() -> None:
     assert report.feasible and again.meta["fallback"]["mode"] == "steps"
     np.testing.assert_array_equal(np.asarray(again.meta["schedule"], bool), schedule)
     rms = hinge_rms(p.robot_motion, again)
-    assert rms < 2 * TOLERANCE and rms < _direct_gap(p) / 30
+    assert rms <= TOLERANCE and rms < _direct_gap(p) / 30
     # the robot's feet mapped back (no correction) are placed where the robot's soles stood
     # (measured within 1.4 mm and 1e-6 rad; the toe keypoint's own 0.18 rad was 0.18 rad off)
     back = footing(p.direct.with_(contacts=schedule), robot, RetargetOptions())
