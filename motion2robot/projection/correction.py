@@ -37,6 +37,11 @@ OVERSHOOT = 1.25
 MU_GROWTH = 4.0
 #: The largest damping tried: a correction that stalls at it stops.
 MU_LAST = 2.0
+#: Each overshoot also shortens the next rounds' steps by this factor (back to whole steps at the
+#: next round that improves on the best): once the damping is high, a round from the best is the
+#: plain step, and where that step overshoots it did so again every round (an MDM throw's first
+#: phase spent 10 of its 16 rounds at 0.0137 rad from the best 0.0087).
+REACH_SHRINK = 0.5
 
 
 def hinge_rms(a: RobotMotion, b: RobotMotion) -> float:
@@ -72,12 +77,13 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
     (:meth:`~.attenuation.Attenuation.aim`, damped by ``mu``); None: ``motion`` itself (plain
     rounds). A round that ends more than OVERSHOOT times the best RMS met, or rounds that stall,
     go back to the best ``h`` with ``mu`` x MU_GROWTH and a fresh mixing history (stalled with
-    ``mu`` at MU_LAST, they stop). Returns the best ``h`` met and the RMS of every round tried (a
+    ``mu`` at MU_LAST, they stop); an overshoot also shortens the rounds' steps by REACH_SHRINK
+    until one improves on the best. Returns the best ``h`` met and the RMS of every round tried (a
     round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
     h, errors = direct, []
     best: tuple[float, HumanMotion, RobotMotion | None] = (float("inf"), direct, None)
-    mu, since = MU, 0
+    mu, since, reach = MU, 0, 1.0
     xs: list[np.ndarray] = []
     fs: list[np.ndarray] = []
     for _ in range(max(1, rounds)):
@@ -86,7 +92,9 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         errors.append(err)
         overshot = aim is not None and err > OVERSHOOT * best[0]
         if err < best[0]:
-            best = (err, h, q)
+            best, reach = (err, h, q), 1.0
+        elif overshot:  # the rounds from the best go a shorter way, until one improves on it
+            reach *= REACH_SHRINK
         if err <= tolerance or not np.isfinite(err):
             break
         stalled = (not overshot and len(errors) - since > STALL_ROUNDS
@@ -103,7 +111,7 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         xs.append(np.asarray(h.positions).ravel())
         fs.append((goal - project_motion(q, robot, h).positions).ravel())
         xs, fs = xs[-memory - 1:], fs[-memory - 1:]
-        h = h.with_(positions=anderson_step(xs, fs).reshape(shape))
+        h = h.with_(positions=(xs[-1] + reach * (anderson_step(xs, fs) - xs[-1])).reshape(shape))
     return best[1], tuple(errors)
 
 
