@@ -108,7 +108,7 @@ def _start(soles: np.ndarray, runs: list) -> tuple[float, float, float] | None:
     ya, yb = (_sole_yaw(soles[first[f], f]) for f in (0, 1))
     mean = ya + 0.5 * _wrap(yb - ya)
     gap = soles[first[0], 0].mean(axis=0)[:2] - soles[first[1], 1].mean(axis=0)[:2]
-    fwd, left = np.array([np.cos(mean), np.sin(mean)]), np.array([-np.sin(mean), np.cos(mean)])
+    fwd, left = _axes(mean)
     return mean, float(gap @ fwd), float(gap @ left)
 
 
@@ -171,7 +171,7 @@ def shorten_steps(soles: np.ndarray, labels: np.ndarray, k: float, width: float,
     start = _start(soles, runs)
     if start is not None:  # the feet the clip starts on: a stance of the robot's, about their midpoint
         mean, fore, lat = start
-        fwd, left = np.array([np.cos(mean), np.sin(mean)]), np.array([-np.sin(mean), np.cos(mean)])
+        fwd, left = _axes(mean)
         half = 0.5 * (k * fore * fwd + (width + k * max(lat - width, 0.0)) * left)
         first = [(f, a, b) for f, a, b, ref in runs if ref is None]
         mid = 0.5 * sum(soles[a, f].mean(axis=0)[:2] for f, a, _ in first)
