@@ -61,7 +61,8 @@ def phases(labels: np.ndarray) -> list[tuple[int, int, int]]:
     return out
 
 
-def _rotz(yaw: np.ndarray) -> np.ndarray:
+def yaw_rotation(yaw: np.ndarray | float) -> np.ndarray:
+    """(..., 2, 2) the rotation by ``yaw`` (rad, ...) about z, in the horizontal plane."""
     c, s = np.cos(yaw), np.sin(yaw)
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
@@ -82,9 +83,9 @@ def anchor_soles(corners: np.ndarray, labels: np.ndarray) -> np.ndarray:
     xy = corners[..., :2]                                             # (T, 2, 4, 2)
     centre = xy.mean(axis=2)                                          # (T, 2, 2)
     yaw = sole_yaw(corners)                                           # (T, 2)
-    rel = np.einsum("tfij,tfkj->tfki", _rotz(-yaw), xy - centre[:, :, None])  # sole layouts, (T, 2, 4, 2)
+    rel = np.einsum("tfij,tfkj->tfki", yaw_rotation(-yaw), xy - centre[:, :, None])  # sole layouts, (T, 2, 4, 2)
     for f, a, b in phases(labels):
         layout = rel[a:b, f].mean(axis=0)
-        out[a:b, f, :, :2] = centre[a, f] + layout @ _rotz(yaw[a, f]).T
+        out[a:b, f, :, :2] = centre[a, f] + layout @ yaw_rotation(yaw[a, f]).T
         out[a:b, f, :, 2] = 0.0
     return out

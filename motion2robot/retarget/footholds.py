@@ -20,7 +20,7 @@ import numpy as np
 
 from motion2robot.errors import SolverError
 from motion2robot.retarget.contact_plan import ContactPlan
-from motion2robot.retarget.contacts import phases, sole_yaw
+from motion2robot.retarget.contacts import phases, sole_yaw, yaw_rotation
 from motion2robot.robot.chains import hip_hinges
 from motion2robot.robot.robot import Robot
 
@@ -92,8 +92,7 @@ def feet_placements(soles: np.ndarray, labels: np.ndarray, own: np.ndarray, ankl
         frames = a + np.flatnonzero(own[a:b, f]) if own[a:b, f].any() else np.array([a])
         fwd = (toes[frames, f] - ankles[frames, f]).sum(axis=0)
         yaw = float(np.arctan2(fwd[1], fwd[0])) - float(turns[f])
-        c, s = np.cos(yaw), np.sin(yaw)
-        centre = ankles[frames[0], f] + np.array([[c, -s], [s, c]]) @ offsets[f]
+        centre = ankles[frames[0], f] + yaw_rotation(yaw) @ offsets[f]
         out[a:b, f] = _turned(soles[a, f], centre, yaw)
         out[a:b, f, :, 2] = 0.0
     return out
@@ -141,10 +140,8 @@ def _wrap(a: float) -> float:
 def _turned(sole: np.ndarray, centre: np.ndarray, yaw: float) -> np.ndarray:
     """(4, 3) the sole ``sole`` (4, 3) turned about its centre to ``yaw`` and moved to ``centre`` (2,)."""
     c0 = sole.mean(axis=0)
-    d = yaw - _sole_yaw(sole)
-    R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
     out = sole.copy()
-    out[:, :2] = (sole[:, :2] - c0[:2]) @ R.T + centre
+    out[:, :2] = (sole[:, :2] - c0[:2]) @ yaw_rotation(yaw - _sole_yaw(sole)).T + centre
     return out
 
 

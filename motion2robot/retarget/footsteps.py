@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motion2robot.retarget.anchor_gap import foot_segments, segment_distance
-from motion2robot.retarget.contacts import phases, sole_yaw
+from motion2robot.retarget.contacts import phases, sole_yaw, yaw_rotation
 
 #: Swing apex as a fraction of the robot's standing root height (op3: ~2 cm, G1: ~6 cm).
 APEX_RATIO = 0.08
@@ -91,8 +91,7 @@ def lift(s: np.ndarray, ramp: float = LIFT_RAMP) -> np.ndarray:
 def _pose(corners: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """Centre (2,), yaw and corner layout (4, 2) in the sole's frame, of flat (4, 3) corners."""
     centre, yaw = (v[0] for v in _centre_yaw(corners[None]))
-    c, s = np.cos(yaw), np.sin(yaw)
-    return centre, float(yaw), (corners[:, :2] - centre) @ np.array([[c, -s], [s, c]])
+    return centre, float(yaw), (corners[:, :2] - centre) @ yaw_rotation(float(yaw))
 
 
 def _place(centre: np.ndarray, yaw: np.ndarray, layout: np.ndarray, z: np.ndarray) -> np.ndarray:

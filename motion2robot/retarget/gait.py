@@ -59,7 +59,7 @@ from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget.constraints import clamp_velocity, support_margin, support_planes
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
-from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted, sole_yaw
+from motion2robot.retarget.contacts import anchor_soles, contact_labels, planted, sole_yaw, yaw_rotation
 from motion2robot.retarget.footholds import (
     feet_placements,
     filled,
@@ -186,7 +186,7 @@ def placements(setup: Setup, anchored: np.ndarray, own: np.ndarray) -> np.ndarra
     offsets, turns = np.zeros((2, 2)), np.zeros(2)
     for f, side in enumerate(("left", "right")):
         yaw = float(sole_yaw(corners0[0, f]))
-        local = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]])  # world -> sole frame
+        local = yaw_rotation(-yaw)  # world -> sole frame
         ankle = kp0[0, names.index(f"{side}_ankle"), :2]
         offsets[f] = local @ (corners0[0, f, :, :2].mean(axis=0) - ankle)
         toe = local @ (kp0[0, names.index(f"{side}_foot"), :2] - ankle)
