@@ -239,29 +239,50 @@ def test_auto_legs_order_follows_the_clip():
 
 
 @requires_shared
-def test_a_gliding_thrower_stands_rather_than_steps_in_place(op3):
-    """MDM's throw #5 glides 5 m (its pelvis travels, so ``steps`` is tried first), but its steps
-    would keep 4 % of their length (told by the steps' first stage, the free solve): the robot
-    would step in place. The stance is tried at the first tempo first and kept, saying why, with
-    about half the keypoint error; throw #25 glides alike but falls in the stance at x1, so its
-    steps come next and are kept at x1 rather than the stance slowed."""
+def test_a_gliding_thrower_is_walked_when_its_steps_are_nearer_than_the_stance(op3):
+    """MDM's throw #5 glides 5 m (its pelvis travels, so ``steps`` would go first), but its steps
+    keep 4 % of their length (told by the steps' first stage): a glide, so the stance is tried at
+    the first tempo first. It passes; the steps of that tempo are made too, measured against the
+    same scaled human (the keypoint error ``score`` reports), nearer, judged and kept, saying
+    why. Throw #25 glides alike but falls in the stance at x1: its steps come next and are kept
+    at x1 rather than the stance slowed."""
     from motion2robot.retarget.executable import GLIDE_SHARE
-
-    def kp(m):
-        return float(np.mean(m.meta["solver"]["residual_per_frame"]))
+    from motion2robot.retarget.nearness import keypoint_error
+    from motion2robot.score.fidelity import fidelity
 
     clips = MOTIONS / "mdm_results" / "mdm_throw_ball_results.npy"
-    motion = retarget(read_motion(clips, clip=5)[0], op3)
-    assert motion.meta["fallback"]["mode"] == "stance" and motion.meta["tempo"] == 1.0
-    # the steps' first stage told the glide; the stance passed: no steps attempt was made
-    assert [(a["legs"], a["tempo"], a["feasible"]) for a in motion.meta["attempts"]] == [("stance", 1.0, True)]
-    assert "steps set aside" in motion.meta["fallback"]["why"] and "glide" in motion.meta["fallback"]["why"]
+    human = read_motion(clips, clip=5)[0]
+    motion = retarget(human, op3)
+    assert motion.meta["fallback"]["mode"] == "steps" and motion.meta["tempo"] == 1.0
+    assert [(a["legs"], a["tempo"], a["feasible"]) for a in motion.meta["attempts"]] == [("stance", 1.0, True),
+                                                                                         ("steps", 1.0, True)]
     assert [s["legs"] for s in motion.meta["legs_skipped"] if s.get("set_aside")] == ["steps"]
-    stepped = retarget(read_motion(clips, clip=5)[0], op3, RetargetOptions(tempo=1.0, legs="steps"))
-    assert stepped.meta["solver"]["steps"]["step_factor"] < GLIDE_SHARE and kp(motion) < 0.6 * kp(stepped)
+    assert motion.meta["solver"]["steps"]["step_factor"] < GLIDE_SHARE
+    near = motion.meta["nearness"]
+    assert near["kept"] == "steps" and near["keypoint_error_m"]["steps"] < near["keypoint_error_m"]["stance"]
+    assert "the steps are nearer" in motion.meta["fallback"]["why"]
+    stood = retarget(human, op3, RetargetOptions(tempo=1.0, legs="stance"))
+    # the figures compared are score's fidelity figure, of the two motions
+    for legs, m in (("steps", motion), ("stance", stood)):
+        assert abs(near["keypoint_error_m"][legs] - keypoint_error(m, human, op3)) < 1e-5
+        assert abs(near["keypoint_error_m"][legs] - fidelity(human, m, op3)["keypoint_error_m"]) < 1e-4
     kept = retarget(read_motion(clips, clip=25)[0], op3)
     assert kept.meta["fallback"]["mode"] == "steps" and kept.meta["tempo"] == 1.0
     assert [(a["legs"], a["tempo"]) for a in kept.meta["attempts"]] == [("stance", 1.0), ("steps", 1.0)]
+    assert "nearness" not in kept.meta   # the stance failed: nothing to compare
+
+
+@requires_shared
+def test_the_stance_is_kept_when_the_steps_are_farther(op3):
+    """Bandai's punch stays in place and shuffles its feet: the stance passes at x1, the steps of
+    that tempo are made and measured farther from the human, so they are not judged and the stance
+    is kept, saying so."""
+    motion = retarget(read_motion(MOTIONS / "bvh" / "bandai_punch_normal_001.bvh")[0], op3)
+    assert motion.meta["fallback"]["mode"] == "stance" and motion.meta["tempo"] == 1.0
+    assert [a["legs"] for a in motion.meta["attempts"]] == ["stance"]
+    near = motion.meta["nearness"]
+    assert near["kept"] == "stance" and near["keypoint_error_m"]["steps"] > near["keypoint_error_m"]["stance"]
+    assert "steps at x1.00 are farther from the human" in motion.meta["fallback"]["why"]
 
 
 def test_ascending_search_stops_at_the_first_tempo_that_passes():

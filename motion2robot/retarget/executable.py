@@ -20,8 +20,13 @@ attempt that passes, in this order:
    nearest thing to it; one that stays in place tries ``stance`` first, which keeps its tempo more
    often; one whose ``steps`` would step in place (the steps kept below :data:`GLIDE_SHARE` of the
    human's: a glide, as generated throwers skate, told by ``steps``' first stage alone) tries the
-   stance at the first tempo first, then the steps, then the stance slower. ``steps`` is not tried
-   when no foot steps. Clips with flight phases (runs, jumps) skip
+   stance at the first tempo first, then the steps, then the stance slower. When the stance
+   passes at the first tempo and ``steps`` is still to be tried, the steps of that tempo are made
+   too and kept instead if they are nearer to the human (:mod:`~.nearness`: the keypoint error
+   ``score`` reports) and pass (``meta["nearness"]`` says what was compared): the stance goes
+   first for its tempo, not for being nearer, and a motion that steps on the spot or a little
+   way (as the robot's own version of a walk, :mod:`~motion2robot.projection`) is nearer walked
+   than stood. ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
    the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
    them with a foot always on the floor.
 
@@ -42,6 +47,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.contacts import contact_labels
 from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
+from motion2robot.retarget.nearness import keypoint_error
 from motion2robot.retarget.options import LEG_MODES
 from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
@@ -60,8 +66,9 @@ TRAVEL_M = 0.5
 #: A ``steps`` attempt whose steps keep less than this share of the human's length (its step
 #: factor) steps in place: the human's steps are then over 1.8 leg lengths at the robot's scale,
 #: beyond a running stride (the dev clips' walks, runs and dances keep 14-63 %; MDM throwers whose
-#: pelvis glides 3-5 m keep 4-8 %): glides, not steps, and the stance, nearer to them (about half
-#: the keypoint error on those throwers), is tried before ``steps`` is kept.
+#: pelvis glides 3-5 m keep 4-8 %): glides, not steps, and the stance, which keeps the tempo, is
+#: tried at the first tempo before the steps are slowed (the nearer of the two passing at that
+#: tempo is kept).
 GLIDE_SHARE = 0.1
 
 _MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
@@ -184,8 +191,41 @@ def legs_of(motion: RobotMotion) -> str:
     return str(fallback["mode"]) if isinstance(fallback, Mapping) and fallback.get("mode") else "whole"
 
 
+def _nearer(stance: Attempt, steps: Callable[[], RobotMotion], human: HumanMotion, robot: Robot,
+            judge: Callable[[RobotMotion], object]) -> tuple[Attempt, dict]:
+    """The nearer to ``human`` (:func:`~.nearness.keypoint_error`) of the passing ``stance``
+    attempt and the ``steps`` of the same tempo (made by ``steps()``, judged only when nearer),
+    and what was compared: {"tempo", "keypoint_error_m": {mode: m}, "kept", and "attempt": the
+    judged steps attempt, for the caller's list of attempts}."""
+    figures: dict = {"tempo": stance.factor}
+    try:
+        motion = steps()
+    except PatternError as err:  # a foot never down: no pattern to compare
+        return stance, {**figures, "kept": "stance", "steps": str(err)}
+    error = {"stance": keypoint_error(stance.motion, human, robot), "steps": keypoint_error(motion, human, robot)}
+    figures["keypoint_error_m"] = {k: round(v, 5) for k, v in error.items()}
+    if error["steps"] >= error["stance"]:
+        return stance, {**figures, "kept": "stance"}
+    walked = Attempt("steps", stance.factor, motion, judge(motion))
+    return (walked if walked.feasible else stance), {**figures, "kept": "steps" if walked.feasible else "stance",
+                                                      "attempt": walked}
+
+
+def _nearness_words(nearness: dict | None, kept: str) -> list[str]:
+    """The fallback's words on the comparison of :func:`_nearer` (none when there was none, or
+    the steps were nearer but failed: the attempts say so)."""
+    error = (nearness or {}).get("keypoint_error_m")
+    if not error:
+        return []
+    cm = f"keypoint error {100 * error['steps']:.1f} cm vs the stance's {100 * error['stance']:.1f} cm"
+    if kept == "steps":
+        return [f"the stance passes too at x{nearness['tempo']:.2f}, but the steps are nearer to the human ({cm})"]
+    return [f"steps at x{nearness['tempo']:.2f} are farther from the human ({cm})"] \
+        if error["steps"] >= error["stance"] else []
+
+
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
-              skipped: list[dict]) -> dict | None:
+              skipped: list[dict], nearness: dict | None = None) -> dict | None:
     """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
     if final.legs == "whole":
         return None
@@ -201,7 +241,8 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                          for s in skipped if s["legs"] != final.legs]
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
                            for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode])
-                           and mode != final.legs and mode not in noted])
+                           and mode != final.legs and mode not in noted and not any(a.feasible for a in runs)]
+                        + _nearness_words(nearness, final.legs))
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -245,6 +286,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
 
     tried: list[Attempt] = []
     chosen = None
+    nearness: dict | None = None
     skipped: list[dict] = []
     queue = [(m, factors) for m in modes]  # each legs mode with the tempos it is searched over
     probed = False
@@ -277,6 +319,10 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
             skipped.append({"legs": mode, "skipped": str(err)})
             continue
         tried += runs
+        if ok is not None and legs == "auto" and ok.legs == "stance" and ok.factor == factors[0] \
+                and any(m == "steps" and factors[0] in ts for m, ts in queue[i:]):
+            ok, nearness = _nearer(ok, lambda: solve(at(factors[0]), "steps"), at(factors[0]), robot, judge)
+            tried += [a for a in [nearness.pop("attempt", None)] if a is not None]
         if ok is not None:
             chosen = ok
             break
@@ -289,6 +335,8 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
                                 "failed": a.failed()} for a in tried]}
     if skipped:
         meta["legs_skipped"] = skipped
+    if nearness:
+        meta["nearness"] = nearness
     if final.report is None:
         meta["tempo_reason"] = (f"played x{final.factor:.2f} as asked (--tempo {tempo})" if final.factor != 1.0
                                 else "played at the generated tempo (x1.00)")
@@ -301,7 +349,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         base = next(a for a in tried if a.legs == final.legs)
         meta["tempo_reason"] = (f"slowed x{final.factor:.2f}, the smallest slow-down tried that passes "
                                 f"(at x{base.factor:.2f} {_words(base.failed())} failed)")
-    meta["fallback"] = _fallback(final, legs, flight, tried, robot, skipped)
+    meta["fallback"] = _fallback(final, legs, flight, tried, robot, skipped, nearness)
     if (chosen is None and final.report is not None and judging
             and needs_full_check(final.report, check_options)):  # the full report of what is returned
         final = Attempt(final.legs, final.factor, final.motion, _judge(robot, check_options, full=True)(final.motion))
