@@ -10,7 +10,7 @@ import pytest
 
 from motion2robot.errors import UserError
 from motion2robot.motion.canonical import to_canonical
-from motion2robot.motion.human import KP, SMPL22
+from motion2robot.motion.human import KP, SMPL22, SMPL22_PARENTS
 from motion2robot.projection import (
     TOLERANCE,
     MotionArrayError,
@@ -83,6 +83,29 @@ def test_robot_frames_undo_the_tempo_and_the_rate() -> None:
     assert np.allclose(robot_frames(5, 20.0, 20.0, 2.0, 9), [0, 2, 4, 6, 8])
     assert np.allclose(robot_frames(3, 20.0, 100.0, 1.0, 11), [0, 5, 10])
     assert robot_frames(4, 20.0, 20.0, 3.0, 8)[-1] == 7  # clamped to the last robot frame
+
+
+def test_keep_bones_sets_the_lengths_and_keeps_the_directions() -> None:
+    from motion2robot.projection.maths import bone_drift, bone_lengths, keep_bones
+
+    rng = np.random.default_rng(3)
+    ref = _pose(4) + rng.normal(0, 0.01, (4, 22, 3))
+    moved = ref + rng.normal(0, 0.05, ref.shape)
+    kept = keep_bones(moved, ref)
+    assert np.allclose(bone_lengths(kept), bone_lengths(ref)) and bone_drift(kept, ref) < 1e-12
+    assert np.allclose(kept[:, 0], moved[:, 0])  # the pelvis where the round put it
+    for j in range(1, 22):  # every bone along the direction the round gave it
+        p = SMPL22_PARENTS[j]
+        a, b = kept[:, j] - kept[:, p], moved[:, j] - moved[:, p]
+        assert np.allclose(np.cross(a, b), 0.0, atol=1e-12) and (np.sum(a * b, axis=-1) > 0).all()
+    loose = keep_bones(moved, ref, slack=0.05)
+    assert 0.0 < bone_drift(loose, ref) <= 0.05 + 1e-12
+    assert bone_drift(keep_bones(ref * 1.02, ref, slack=0.05), ref * 1.02) == pytest.approx(0.0)
+    folded = moved.copy()
+    folded[:, KP["left_knee"]] = folded[:, KP["left_hip"]]  # a thigh shrunk to a point
+    back = keep_bones(folded, ref)
+    assert np.allclose(back[:, KP["left_knee"]] - back[:, KP["left_hip"]],
+                       ref[:, KP["left_knee"]] - ref[:, KP["left_hip"]])  # the reference's thigh
 
 
 def test_from_canonical_inverts_the_readers_transform() -> None:
@@ -270,6 +293,44 @@ def test_an_overshooting_round_is_retried_a_shorter_way() -> None:
     assert errors == pytest.approx((0.02, 0.05, 0.01))
     step = [np.abs(c - calls[0]).max() for c in calls[1:]]
     assert step[1] == pytest.approx(REACH_SHRINK * step[0])
+
+
+@requires_shared
+def test_the_rounds_keep_the_bones_of_the_direct_mapping(monkeypatch) -> None:
+    """Rounds lured into stretching ``human'``'s legs (free, they stretched a HumanML3D clip's
+    legs to 3.8 m and arms by 43 %, their retargeting ever nearer) move the bones' directions
+    only: every round's lengths stay within BONE_SLACK of the direct mapping's, frame by frame."""
+    import motion2robot.projection.correction as correction
+    from motion2robot.projection.correction import BONE_SLACK, refine
+    from motion2robot.projection.maths import bone_drift
+    from motion2robot.retarget.scale import human_length
+
+    _, p = _projected()
+    robot, q0 = _robot(), p.robot_motion
+    legs0 = human_length(p.direct, "legs")
+    below = [KP[k] for k in ("left_knee", "right_knee", "left_ankle", "right_ankle", "left_foot", "right_foot")]
+    seen = []
+
+    def way_back(motion, robot, h):  # the aim maps back to h with legs 20 % longer, anything else to h
+        pos = np.array(h.positions)
+        if motion.meta.get("aimed"):
+            for side in ("left", "right"):
+                hip = pos[:, [KP[f"{side}_hip"]]]
+                idx = [j for j in below if SMPL22[j].startswith(side)]
+                pos[:, idx] = hip + 1.2 * (pos[:, idx] - hip)
+        return h.with_(positions=pos)
+
+    def lured(h):  # 0.02 rad off, less the longer the legs
+        seen.append(h)
+        off = 0.02 / (1.0 + 50.0 * max(0.0, human_length(h, "legs") / legs0 - 1.0))
+        return q0.with_(qpos=np.concatenate([q0.qpos[:, :7], q0.qpos[:, 7:] + off], axis=1))
+
+    monkeypatch.setattr(correction, "project_motion", way_back)
+    best, errors = refine(p.direct, q0, robot, lured, rounds=6, aim=lambda q, mu: q0.with_(meta={"aimed": True}))
+    assert len(seen) > 2
+    assert all(bone_drift(h.positions, p.direct.positions) <= BONE_SLACK + 1e-9 for h in seen)
+    # the legs went as far as the slack lets them (the lure worked within it), no farther
+    assert human_length(best, "legs") / legs0 - 1.0 == pytest.approx(BONE_SLACK, abs=1e-6)
 
 
 def _robot():

@@ -49,7 +49,13 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    with the solves on q0 first they mostly stay off. (Of these a ``steps`` result's walking
    pattern runs the smoothing alone, of the upper body it takes from the free solve: its first
    phase corrects against the pattern with that body's velocity clamp only; 9 of the 32 clips on
-   ``steps`` ended closer, 6 further, the median 0.0022 -> 0.0018 rad.) :attr:`Projection.direct`
+   ``steps`` ended closer, 6 further, the median 0.0022 -> 0.0018 rad.) The rounds keep
+   ``human'`` a skeleton: each round's bones keep the directions it gives them and lengths within
+   :data:`BONE_SLACK` of the direct mapping's, frame by frame (:func:`keep_bones`; free, the
+   rounds stretched arms by up to 43 % to pull a robot's elbows straighter, and the legs of a
+   HumanML3D clip sitting on the floor to 3.8 m; MDM's own samples vary their bones by 9-17 %
+   at the 95th percentile). :attr:`Projection.bone_drift` says how far the returned one went.
+   :attr:`Projection.direct`
    keeps steps 1-4 alone (what the viewer and the report draw).
 
 ``human'`` is in the original's canonical frame (metres, z up, same floor and heading);
@@ -67,6 +73,7 @@ import numpy as np
 from motion2robot.motion.human import SMPL22, HumanMotion
 from motion2robot.projection.attenuation import Attenuation, attenuation
 from motion2robot.projection.correction import (
+    BONE_SLACK,
     MEMORY,
     ROUNDS,
     SOLVER_TOLERANCE,
@@ -79,7 +86,10 @@ from motion2robot.projection.correction import (
 from motion2robot.projection.inputs import MotionArrayError, as_human
 from motion2robot.projection.mapping import project_motion, robot_points
 from motion2robot.projection.maths import (
+    bone_drift,
+    bone_lengths,
     fill_torso,
+    keep_bones,
     from_canonical,
     human_torso,
     joint_distance,
@@ -91,6 +101,7 @@ from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
 __all__ = [
+    "BONE_SLACK",
     "MEMORY",
     "ROUNDS",
     "SOLVER_TOLERANCE",
@@ -100,12 +111,15 @@ __all__ = [
     "Projection",
     "as_human",
     "attenuation",
+    "bone_drift",
+    "bone_lengths",
     "chosen_solve",
     "fill_torso",
     "from_canonical",
     "hinge_rms",
     "human_torso",
     "joint_distance",
+    "keep_bones",
     "project",
     "project_motion",
     "refine",
@@ -152,6 +166,12 @@ class Projection:
         ``human'`` at the same tempo and legs (the best round's: the ``human'`` returned; None
         when no round ran)."""
         return min(self.rounds) if self.rounds else None
+
+    @property
+    def bone_drift(self) -> float:
+        """The largest relative change of a bone's length in any frame of ``human'`` from the direct
+        mapping's (:func:`~.maths.bone_drift`; the correction keeps it within BONE_SLACK)."""
+        return bone_drift(self.human.positions, self.direct.positions)
 
     @property
     def executable(self) -> bool | None:
@@ -229,7 +249,7 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     solved, solver_errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, solver_stages(options)),
                                    rounds, tolerance * SOLVER_TOLERANCE, aim=aim)
     projected, errors = refine(solved, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance,
-                               aim=aim)
+                               aim=aim, reference=direct)
     positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
     return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
                       distance=joint_distance(human.positions, projected.positions), positions=positions,

@@ -10,6 +10,7 @@ import numpy as np
 
 from motion2robot.motion.human import HumanMotion
 from motion2robot.projection.mapping import project_motion
+from motion2robot.projection.maths import keep_bones
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
 
@@ -37,6 +38,13 @@ OVERSHOOT = 1.25
 MU_GROWTH = 4.0
 #: The largest damping tried: a correction that stalls at it stops.
 MU_LAST = 2.0
+#: How far a round may make a bone of ``human'`` longer or shorter than the direct mapping's
+#: (a fraction, per frame and bone: :func:`~.maths.keep_bones`). Free, the rounds stretched arms
+#: by up to 43 % (the lever that pulls a robot's elbow straighter than a straight target does)
+#: and a sitting clip's legs to 3.8 m; held to the direct mapping's lengths, 28 of the 66 dev
+#: clips came back within TOLERANCE where 35 did free; at 5 %, 33 (10 %: 32). MDM's own samples
+#: vary their bones by 9-17 % at the 95th percentile.
+BONE_SLACK = 0.05
 #: Each overshoot also shortens the next rounds' steps by this factor (back to whole steps at the
 #: next round that improves on the best): once the damping is high, a round from the best is the
 #: plain step, and where that step overshoots it did so again every round (an MDM throw's first
@@ -67,7 +75,8 @@ def anderson_step(xs: list[np.ndarray], fs: list[np.ndarray]) -> np.ndarray:
 
 def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callable[[HumanMotion], RobotMotion],
            rounds: int = ROUNDS, tolerance: float = TOLERANCE, memory: int = MEMORY,
-           aim: Callable[[RobotMotion, float], RobotMotion] | None = None) -> tuple[HumanMotion, tuple[float, ...]]:
+           aim: Callable[[RobotMotion, float], RobotMotion] | None = None,
+           reference: HumanMotion | None = None) -> tuple[HumanMotion, tuple[float, ...]]:
     """The target correction (step 5 of the module text): starting from ``direct`` (= P(motion)),
     solve the fixed point ``P(solve(h)) = P(motion)`` for ``h`` by Anderson-accelerated rounds of
     ``h <- h + (P(aim(q, mu)) - P(q))``, q = ``solve(h)`` (:func:`anderson_step`, the last
@@ -78,9 +87,12 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
     rounds). A round that ends more than OVERSHOOT times the best RMS met, or rounds that stall,
     go back to the best ``h`` with ``mu`` x MU_GROWTH and a fresh mixing history (stalled with
     ``mu`` at MU_LAST, they stop); an overshoot also shortens the rounds' steps by REACH_SHRINK
-    until one improves on the best. Returns the best ``h`` met and the RMS of every round tried (a
+    until one improves on the best. Every round's ``h`` keeps the bones of ``reference`` (default
+    ``direct``) within BONE_SLACK (:func:`~.maths.keep_bones`: each bone's direction as the round
+    moved it, its length clipped). Returns the best ``h`` met and the RMS of every round tried (a
     round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
+    bones = np.asarray((reference or direct).positions)  # human' keeps the skeleton it was mapped back to
     h, errors = direct, []
     best: tuple[float, HumanMotion, RobotMotion | None] = (float("inf"), direct, None)
     mu, since, reach = MU, 0, 1.0
@@ -111,7 +123,8 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
         xs.append(np.asarray(h.positions).ravel())
         fs.append((goal - project_motion(q, robot, h).positions).ravel())
         xs, fs = xs[-memory - 1:], fs[-memory - 1:]
-        h = h.with_(positions=(xs[-1] + reach * (anderson_step(xs, fs) - xs[-1])).reshape(shape))
+        h = h.with_(positions=keep_bones((xs[-1] + reach * (anderson_step(xs, fs) - xs[-1])).reshape(shape), bones,
+                                          BONE_SLACK))
     return best[1], tuple(errors)
 
 

@@ -83,6 +83,45 @@ def fill_torso(original: np.ndarray, projected: np.ndarray, robot_up: np.ndarray
     return out
 
 
+def bone_lengths(positions: np.ndarray) -> np.ndarray:
+    """(T, 22) length (m) of the bone from each SMPL22 joint's parent to the joint (0 for the
+    pelvis) in (T, 22, 3) ``positions``."""
+    P = np.asarray(positions, dtype=np.float64)
+    out = np.zeros(P.shape[:2])
+    out[:, 1:] = np.linalg.norm(P[:, 1:] - P[:, list(SMPL22_PARENTS[1:])], axis=-1)
+    return out
+
+
+def bone_drift(positions: np.ndarray, reference: np.ndarray) -> float:
+    """The largest relative change (0 = none) of a bone's length, over frames and bones, between
+    (T, 22, 3) ``positions`` and ``reference`` (bones of zero reference length left out)."""
+    a, b = bone_lengths(positions)[:, 1:], bone_lengths(reference)[:, 1:]
+    ok = b > 1e-9
+    return float(np.max(np.abs(a[ok] / b[ok] - 1.0), initial=0.0))
+
+
+def keep_bones(positions: np.ndarray, reference: np.ndarray, slack: float = 0.0) -> np.ndarray:
+    """(T, 22, 3) ``positions`` rebuilt from the pelvis outwards with each bone's direction as it
+    is and its length within ``slack`` (a fraction) of the same bone's in (T, 22, 3)
+    ``reference``, frame by frame (a bone shrunk to a point takes the reference's direction): the
+    skeleton nearest the motion's bone directions, which are what the retargeter's targets are
+    built from (:func:`~motion2robot.retarget.scale.scaled_keypoints`)."""
+    P = np.asarray(positions, dtype=np.float64)
+    R = np.asarray(reference, dtype=np.float64)
+    out = np.empty_like(P)
+    out[:, 0] = P[:, 0]
+    for j in range(1, len(SMPL22)):
+        p = SMPL22_PARENTS[j]
+        bone, ref = P[:, j] - P[:, p], R[:, j] - R[:, p]
+        norm = np.linalg.norm(bone, axis=-1, keepdims=True)
+        ref_len = np.linalg.norm(ref, axis=-1, keepdims=True)
+        point = norm <= 1e-9 * np.maximum(ref_len, 1e-9)
+        bone, norm = np.where(point, ref, bone), np.where(point, ref_len, norm)
+        length = np.clip(norm, ref_len * (1.0 - slack), ref_len * (1.0 + slack))
+        out[:, j] = out[:, p] + bone * (length / np.maximum(norm, 1e-300))
+    return out
+
+
 def joint_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(T, 22) Euclidean distance (m) between two (T, 22, 3) keypoint arrays."""
     return np.linalg.norm(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64), axis=-1)
