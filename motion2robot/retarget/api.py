@@ -29,19 +29,21 @@
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+
+import numpy as np
 
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget.balance_stage import dynamic_balance
-from motion2robot.retarget.contact_plan import plan_contacts
+from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
 from motion2robot.retarget.executable import plan
 from motion2robot.retarget.finite import check_solution
 from motion2robot.retarget.gait import Footing, footing, steps
 from motion2robot.retarget.options import LEGS, RetargetOptions
 from motion2robot.retarget.result import StageFigures, robot_motion
 from motion2robot.retarget.root_pass import root_shift
-from motion2robot.retarget.setup import prepare, require_solvable
+from motion2robot.retarget.setup import Setup, prepare, require_solvable
 from motion2robot.retarget.solve_stages import free_solve, joint_smoothing, pinned_solve, servo_rounds
 from motion2robot.retarget.stance import stance
 from motion2robot.robot.robot import Robot
@@ -73,12 +75,20 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
         probed.append((h, footing(h, robot, inner)))
         return probed[-1][1].factor
 
+    sketched: dict[int, Solved] = {}  # the stance's solves the comparison measured; its attempt goes on from them
+
+    def sketch(h: HumanMotion) -> RobotMotion:
+        sketched[id(h)] = solves(stance(h), robot, inner)
+        return sketched[id(h)].motion()
+
     def solve(h: HumanMotion, legs: str) -> RobotMotion:
         if legs == "steps" and probed and probed[0][0] is h:
             return steps(h, robot, inner, probed.pop()[1])
+        if legs == "stance" and id(h) in sketched:
+            return finish(sketched.pop(id(h)))
         return solve_legs(h, robot, inner, legs)
 
-    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe)
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe, sketch)
 
 
 def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs: str) -> RobotMotion:
@@ -90,8 +100,26 @@ def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs:
     return whole_body(stance(human) if legs == "stance" else human, robot, options)
 
 
-def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:
-    """The whole-body pipeline (stages 1-9 of the module text) on ``human`` at its own tempo."""
+@dataclass(frozen=True)
+class Solved:
+    """The whole-body pipeline after its solves (stages 1-4 of the module text): the trajectory
+    ``Q`` (T, nq) and what stages 5-9 go on from (:func:`finish`)."""
+
+    setup: Setup
+    contacts: ContactPlan
+    Q: np.ndarray
+    free: object
+    pinned: object
+    started: tuple[float, float]  # perf_counter at the start and at the solves' start
+
+    def motion(self) -> RobotMotion:
+        """``Q`` as a robot motion without meta (to measure it, not to play it)."""
+        return RobotMotion(qpos=self.Q, fps=self.setup.fps, joint_names=self.setup.robot.joint_names,
+                           robot=self.setup.robot.name)
+
+
+def solves(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> Solved:
+    """Stages 1-4 of the whole-body pipeline on ``human`` at its own tempo."""
     opt = options or RetargetOptions()
     if opt.fps is not None and abs(opt.fps - human.fps) > 1e-9:
         human = resample(human, opt.fps)
@@ -101,6 +129,12 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
     Q, free = free_solve(setup)
     contacts = plan_contacts(setup, setup.points(Q)[1])
     Q, pinned = pinned_solve(setup, contacts, Q)
+    return Solved(setup, contacts, Q, free, pinned, (t_all, t_solve))
+
+
+def finish(solved: Solved) -> RobotMotion:
+    """Stages 5-9 of the whole-body pipeline, from its solves."""
+    setup, contacts, Q, opt = solved.setup, solved.contacts, solved.Q, solved.setup.opt
     Q, rounds = servo_rounds(setup, contacts, Q)
     if opt.smoothing:
         Q = joint_smoothing(setup, contacts, Q)
@@ -113,8 +147,14 @@ def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None
         shift = root_shift(pts[1], contacts.labels, setup.fps, setup.root_target, hold_yaw=opt.hold_stance_yaw)
         Q = shift.apply(Q)  # a rigid root motion moves every point with it; the capsule gaps stay
         pts = (shift.points(pts[0]), shift.points(pts[1]), shift.points(pts[2][:, None])[:, 0], pts[3])
+    t_all, t_solve = solved.started
     solve_s = time.perf_counter() - t_solve
-    check_solution(Q, robot.joint_names, setup.where)
-    stages = StageFigures(free, pinned, rounds, zmp, shift.figures() if shift is not None else None,
+    check_solution(Q, setup.robot.joint_names, setup.where)
+    stages = StageFigures(solved.free, solved.pinned, rounds, zmp, shift.figures() if shift is not None else None,
                           solve_s, time.perf_counter() - t_all)
     return robot_motion(setup, contacts, Q, pts, stages, shift is not None)
+
+
+def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:
+    """The whole-body pipeline (stages 1-9 of the module text) on ``human`` at its own tempo."""
+    return finish(solves(human, robot, options))

@@ -20,10 +20,14 @@ attempt that passes, in this order:
    nearest thing to it; one that stays in place tries ``stance`` first, which keeps its tempo more
    often; one whose ``steps`` would step in place (the steps kept below :data:`GLIDE_SHARE` of the
    human's: a glide, as generated throwers skate, told by ``steps``' first stage alone) tries the
-   stance at the first tempo first, then the steps, then the stance slower. When the stance
-   passes at the first tempo and ``steps`` is still to be tried, the steps of that tempo are made
-   too and kept instead if they are nearer to the human (:mod:`~.nearness`: the keypoint error
-   ``score`` reports) and pass (``meta["nearness"]`` says what was compared): the stance goes
+   stance at the first tempo first, then the steps, then the stance slower. Where the stance
+   comes before ``steps``, both are made at the first tempo and the nearer to the human
+   (:mod:`~.nearness`: the keypoint error ``score`` reports) is judged first; the steps, when
+   nearer and passing, are kept (``meta["nearness"]`` says what was compared). The stance is
+   measured after its solves (``retarget`` passes a ``sketch``: stages 1-4 of the whole body, half
+   its cost, from which the stance goes on when it is judged; its later stages, which make it
+   followable by the servos, moved its keypoint error by up to 5 mm on the dev clips, away from
+   the human, so the comparison leans to the stance): the stance goes
    first for its tempo, not for being nearer, and a motion that steps on the spot or a little
    way (as the robot's own version of a walk, :mod:`~motion2robot.projection`) is nearer walked
    than stood. ``steps`` is not tried when no foot steps. Clips with flight phases (runs, jumps) skip
@@ -67,8 +71,8 @@ TRAVEL_M = 0.5
 #: factor) steps in place: the human's steps are then over 1.8 leg lengths at the robot's scale,
 #: beyond a running stride (the dev clips' walks, runs and dances keep 14-63 %; MDM throwers whose
 #: pelvis glides 3-5 m keep 4-8 %): glides, not steps, and the stance, which keeps the tempo, is
-#: tried at the first tempo before the steps are slowed (the nearer of the two passing at that
-#: tempo is kept).
+#: tried at the first tempo before the steps are slowed (of the two at that tempo, the nearer is
+#: judged first).
 GLIDE_SHARE = 0.1
 
 _MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
@@ -191,37 +195,39 @@ def legs_of(motion: RobotMotion) -> str:
     return str(fallback["mode"]) if isinstance(fallback, Mapping) and fallback.get("mode") else "whole"
 
 
-def _nearer(stance: Attempt, steps: Callable[[], RobotMotion], human: HumanMotion, robot: Robot,
-            judge: Callable[[RobotMotion], object]) -> tuple[Attempt, dict]:
-    """The nearer to ``human`` (:func:`~.nearness.keypoint_error`) of the passing ``stance``
-    attempt and the ``steps`` of the same tempo (made by ``steps()``, judged only when nearer),
-    and what was compared: {"tempo", "keypoint_error_m": {mode: m}, "kept", and "attempt": the
-    judged steps attempt, for the caller's list of attempts}."""
-    figures: dict = {"tempo": stance.factor}
+def _compare(stance: RobotMotion, steps: Callable[[], RobotMotion], tempo: float, human: HumanMotion,
+             robot: Robot) -> dict:
+    """What the ``stance`` and the steps (``steps()``) of one tempo measure against ``human`` (the
+    human at that tempo; :func:`~.nearness.keypoint_error`): {"tempo", "keypoint_error_m":
+    {mode: m}}, or {"tempo", "steps": why} when the clip gives no walking pattern."""
+    figures: dict = {"tempo": tempo}
     try:
-        motion = steps()
+        steps = steps()
     except PatternError as err:  # a foot never down: no pattern to compare
-        return stance, {**figures, "kept": "stance", "steps": str(err)}
-    error = {"stance": keypoint_error(stance.motion, human, robot), "steps": keypoint_error(motion, human, robot)}
-    figures["keypoint_error_m"] = {k: round(v, 5) for k, v in error.items()}
-    if error["steps"] >= error["stance"]:
-        return stance, {**figures, "kept": "stance"}
-    walked = Attempt("steps", stance.factor, motion, judge(motion))
-    return (walked if walked.feasible else stance), {**figures, "kept": "steps" if walked.feasible else "stance",
-                                                      "attempt": walked}
+        return {**figures, "steps": str(err)}
+    error = {"stance": keypoint_error(stance, human, robot), "steps": keypoint_error(steps, human, robot)}
+    return {**figures, "keypoint_error_m": {k: round(v, 5) for k, v in error.items()}}
 
 
-def _nearness_words(nearness: dict | None, kept: str) -> list[str]:
-    """The fallback's words on the comparison of :func:`_nearer` (none when there was none, or
+def _steps_nearer(nearness: dict | None) -> bool:
+    error = (nearness or {}).get("keypoint_error_m")
+    return bool(error) and error["steps"] < error["stance"]
+
+
+def _nearness_words(nearness: dict | None, final: Attempt) -> list[str]:
+    """The fallback's words on the comparison of :func:`_compare` (none when there was none, or
     the steps were nearer but failed: the attempts say so)."""
     error = (nearness or {}).get("keypoint_error_m")
     if not error:
         return []
-    cm = f"keypoint error {100 * error['steps']:.1f} cm vs the stance's {100 * error['stance']:.1f} cm"
-    if kept == "steps":
-        return [f"the stance passes too at x{nearness['tempo']:.2f}, but the steps are nearer to the human ({cm})"]
-    return [f"steps at x{nearness['tempo']:.2f} are farther from the human ({cm})"] \
-        if error["steps"] >= error["stance"] else []
+    cm = (f"keypoint error {100 * error['steps']:.1f} cm vs the stance's {100 * error['stance']:.1f} cm"
+          + (" after its solves" if nearness.get("stance_measured") == "solves" else ""))
+    at = f"x{nearness['tempo']:.2f}"
+    if not _steps_nearer(nearness):
+        return [f"steps at {at} are farther from the human ({cm})"]
+    if final.legs == "steps" and final.factor == nearness["tempo"]:
+        return [f"the steps at {at} are nearer to the human than the stance, which goes first for its tempo ({cm})"]
+    return []
 
 
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
@@ -242,7 +248,7 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
                            for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode])
                            and mode != final.legs and mode not in noted and not any(a.feasible for a in runs)]
-                        + _nearness_words(nearness, final.legs))
+                        + _nearness_words(nearness, final))
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -256,13 +262,15 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
 
 
 def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
-         check_options: object | None = None,
-         probe: Callable[[HumanMotion], float] | None = None) -> tuple[RobotMotion, object | None]:
+         check_options: object | None = None, probe: Callable[[HumanMotion], float] | None = None,
+         sketch: Callable[[HumanMotion], RobotMotion] | None = None) -> tuple[RobotMotion, object | None]:
     """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
     attempt, not judged). ``solve(human, legs)``: the robot motion of a legs mode at the human's
     tempo; ``check_options``: the judge's CheckOptions (default: every check with the physics
     playback); ``probe(human)``: the step factor ``steps`` would walk ``human`` with (without
-    it, no glide is told apart). See the module text for the order of attempts."""
+    it, no glide is told apart); ``sketch(human)``: the stance of ``human`` after its solves alone
+    (what the comparison with the steps measures; without it, the whole stance; ``solve`` is then
+    expected to go on from that sketch). See the module text for the order of attempts."""
     factors = _factors(tempo, cap, human, robot)
     judging = tempo == "auto" or legs == "auto"
     judge = _judge(robot, check_options) if judging else (lambda motion: None)
@@ -280,9 +288,19 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
             humans[k] = stretch(human, k)
         return humans[k]
 
+    made: dict[tuple[str, float], RobotMotion] = {}  # solved, not yet judged (the comparison's)
+    judged: dict[tuple[str, float], Attempt] = {}
+
     def attempt(mode: str, k: float) -> Attempt:
-        motion = solve(at(k), mode)
-        return Attempt(mode, k, motion, judge(motion))
+        if (mode, k) not in judged:
+            motion = made.pop((mode, k)) if (mode, k) in made else solve(at(k), mode)
+            judged[(mode, k)] = Attempt(mode, k, motion, judge(motion))
+        return judged[(mode, k)]
+
+    def solved(mode: str) -> RobotMotion:
+        if (mode, factors[0]) not in made:
+            made[(mode, factors[0])] = solve(at(factors[0]), mode)
+        return made[(mode, factors[0])]
 
     tried: list[Attempt] = []
     chosen = None
@@ -312,17 +330,26 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
                     continue
             if not tempos:
                 continue
+            if legs == "auto" and mode == "stance" and tempos[0] == factors[0] and nearness is None \
+                    and any(m == "steps" and factors[0] in ts for m, ts in queue[i:]):
+                # the stance goes first for its tempo: the steps of that tempo are made too, and
+                # judged first when nearer
+                stood = sketch(at(factors[0])) if sketch is not None else solved("stance")
+                nearness = _compare(stood, lambda: solved("steps"), factors[0], at(factors[0]), robot)
+                nearness["stance_measured"] = "solves" if sketch is not None else "whole"
+                if _steps_nearer(nearness):
+                    walked = attempt("steps", factors[0])
+                    tried.append(walked)
+                    if walked.feasible:
+                        chosen = walked
+                        break
             ok, runs = _search(lambda k, mode=mode: attempt(mode, k), tempos, ascending=mode == "steps")
         except PatternError as err:  # a walking pattern this clip cannot give (a foot never down)
             if legs != "auto":
                 raise
             skipped.append({"legs": mode, "skipped": str(err)})
             continue
-        tried += runs
-        if ok is not None and legs == "auto" and ok.legs == "stance" and ok.factor == factors[0] \
-                and any(m == "steps" and factors[0] in ts for m, ts in queue[i:]):
-            ok, nearness = _nearer(ok, lambda: solve(at(factors[0]), "steps"), at(factors[0]), robot, judge)
-            tried += [a for a in [nearness.pop("attempt", None)] if a is not None]
+        tried += [a for a in runs if all(a is not b for b in tried)]  # the comparison's steps judged once
         if ok is not None:
             chosen = ok
             break
@@ -336,7 +363,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     if skipped:
         meta["legs_skipped"] = skipped
     if nearness:
-        meta["nearness"] = nearness
+        meta["nearness"] = {**nearness, "kept": final.legs}
     if final.report is None:
         meta["tempo_reason"] = (f"played x{final.factor:.2f} as asked (--tempo {tempo})" if final.factor != 1.0
                                 else "played at the generated tempo (x1.00)")
