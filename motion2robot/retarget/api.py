@@ -23,7 +23,9 @@
 
 :func:`retarget` wraps :func:`whole_body` (or the ``steps`` pattern of :mod:`~.gait`, or the
 ``stance`` of :mod:`~.stance`: :func:`solve_legs`) in the tempo and legs policy of
-:mod:`~motion2robot.retarget.executable` (attempts judged by ``check``).
+:mod:`~motion2robot.retarget.executable` (attempts judged by ``check``). :func:`whole_body` is
+:func:`finish` of :func:`solves` (stages 1-4, then 5-9): the policy measures a stance after its
+solves and, when it judges it, goes on from them.
 """
 
 from __future__ import annotations
