@@ -92,7 +92,7 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
     moved it, its length clipped). Returns the best ``h`` met and the RMS of every round tried (a
     round whose solve changes the frame count stops the rounds)."""
     shape = np.shape(direct.positions)
-    bones = np.asarray((reference or direct).positions)  # human' keeps the skeleton it was mapped back to
+    bones = np.asarray((direct if reference is None else reference).positions)  # human' keeps the skeleton it was mapped back to
     h, errors = direct, []
     best: tuple[float, HumanMotion, RobotMotion | None] = (float("inf"), direct, None)
     mu, since, reach = MU, 0, 1.0
