@@ -28,6 +28,8 @@ import numpy as np
 
 from motion2robot.motion.human import KP, HumanMotion
 from motion2robot.motion.ops import resample
+from motion2robot.retarget.nearness import centred
+from motion2robot.retarget.nearness import mean_distance as keypoint_error  # one definition for score and the policy
 from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
 from motion2robot.robot_motion import RobotMotion
@@ -62,17 +64,6 @@ def tempo_index(robot_frames: int, human_frames: int, factor: float) -> np.ndarr
     (the frame map of :func:`~motion2robot.retarget.tempo.stretch`)."""
     u = np.arange(robot_frames) / max(factor, 1e-9)
     return np.clip(np.rint(u).astype(int), 0, human_frames - 1)
-
-
-def keypoint_error(robot_kp: np.ndarray, human_kp: np.ndarray) -> float:
-    """Mean distance (m) between (T, K, 3) robot and scaled human keypoints."""
-    return float(np.linalg.norm(robot_kp - human_kp, axis=-1).mean())
-
-
-def centred(kp: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """(T, K, 3) keypoints relative to the pelvis keypoint (or to their centroid without one)."""
-    centre = kp[:, [names.index("pelvis")]] if "pelvis" in names else kp.mean(axis=1, keepdims=True)
-    return kp - centre
 
 
 def contact_agreement(robot: np.ndarray, human: np.ndarray) -> float:
