@@ -45,7 +45,10 @@ class RetargetOptions:
     either, the result is judged by ``check`` and the policy of
     :mod:`~motion2robot.retarget.executable` picks the attempt. lift_feet: every sole follows the
     plan of :mod:`~motion2robot.retarget.footsteps` (stance pinned, swings lifted clear of the floor
-    and of the other foot); off = soles pinned in contact frames only, free otherwise."""
+    and of the other foot); off = soles pinned in contact frames only, free otherwise.
+    reach: a robot-shaped human motion (every keypoint reachable exactly in one pose a frame, as
+    ``project`` makes) is retargeted to exactly those poses (:mod:`~motion2robot.retarget.reach`;
+    off = solved like any other)."""
 
     balance: bool = True
     fps: float | None = None
@@ -65,6 +68,7 @@ class RetargetOptions:
     tempo_cap: float = DEFAULT_CAP
     legs: str = "auto"
     lift_feet: bool = True
+    reach: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "tempo", parse_tempo(self.tempo))
