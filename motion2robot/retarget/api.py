@@ -39,6 +39,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.ops import resample
 from motion2robot.retarget.balance_stage import dynamic_balance
 from motion2robot.retarget.contact_plan import ContactPlan, plan_contacts
+from motion2robot.retarget.exact import exact_motion
 from motion2robot.retarget.executable import plan
 from motion2robot.retarget.finite import check_solution
 from motion2robot.retarget.gait import Footing, footing, steps
@@ -90,7 +91,8 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
             return finish(sketched.pop(id(h)))
         return solve_legs(h, robot, inner, legs)
 
-    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe, sketch)
+    reached = exact_motion(human, robot, inner) if opt.legs == "auto" else None
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe, sketch, reached)
 
 
 def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs: str) -> RobotMotion:
@@ -158,5 +160,6 @@ def finish(solved: Solved) -> RobotMotion:
 
 
 def whole_body(human: HumanMotion, robot: Robot, options: RetargetOptions | None = None) -> RobotMotion:
-    """The whole-body pipeline (stages 1-9 of the module text) on ``human`` at its own tempo."""
-    return finish(solves(human, robot, options))
+    """The whole-body pipeline (stages 1-9 of the module text) on ``human`` at its own tempo; a
+    robot-shaped ``human`` (:mod:`~.reach`) is reached exactly instead (:func:`~.exact.exact_motion`)."""
+    return exact_motion(human, robot, options) or finish(solves(human, robot, options))

@@ -4,6 +4,9 @@
 the full :func:`~motion2robot.validate.check` (physics playback included) and picks the first
 attempt that passes, in this order:
 
+0. a robot-shaped motion (the robot's own motion in the human's space, as ``project`` makes:
+   :mod:`~.reach`) its exact poses, as its whole body at x1.0, whatever the legs policy would try
+   first for it;
 1. whole body at the generated tempo (x1.0), unless a lift-off of the human's leaves the whole
    body's static balance too little double support to shift its weight even at the slowest
    tempo allowed (:mod:`~.weight_shift`: then it is not tried, and the fallback says why);
@@ -263,14 +266,17 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
 
 def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
          check_options: object | None = None, probe: Callable[[HumanMotion], float] | None = None,
-         sketch: Callable[[HumanMotion], RobotMotion] | None = None) -> tuple[RobotMotion, object | None]:
+         sketch: Callable[[HumanMotion], RobotMotion] | None = None,
+         reached: RobotMotion | None = None) -> tuple[RobotMotion, object | None]:
     """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
     attempt, not judged). ``solve(human, legs)``: the robot motion of a legs mode at the human's
     tempo; ``check_options``: the judge's CheckOptions (default: every check with the physics
     playback); ``probe(human)``: the step factor ``steps`` would walk ``human`` with (without
     it, no glide is told apart); ``sketch(human)``: the stance of ``human`` after its solves alone
     (what the comparison with the steps measures; without it, the whole stance; ``solve`` is then
-    expected to go on from that sketch). See the module text for the order of attempts."""
+    expected to go on from that sketch); ``reached``: the exact poses of a robot-shaped ``human``
+    at its own tempo (:mod:`~.exact`), judged first as its whole body. See the module text for the
+    order of attempts."""
     factors = _factors(tempo, cap, human, robot)
     judging = tempo == "auto" or legs == "auto"
     judge = _judge(robot, check_options) if judging else (lambda motion: None)
@@ -308,8 +314,12 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     skipped: list[dict] = []
     queue = [(m, factors) for m in modes]  # each legs mode with the tempos it is searched over
     probed = False
+    if reached is not None and factors[0] == 1.0:  # 0. a robot-shaped motion: its exact poses
+        made[("whole", 1.0)] = reached
+        tried.append(attempt("whole", 1.0))
+        chosen = tried[0] if tried[0].feasible else None
     i = 0
-    while i < len(queue):
+    while chosen is None and i < len(queue):
         mode, tempos = queue[i]
         i += 1
         if mode == "whole" and legs == "auto":
