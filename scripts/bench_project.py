@@ -102,7 +102,7 @@ def main() -> int:
         worst = max(jd, key=jd.get)
         direct = hinge_rms(p.robot_motion, chosen_solve(p.robot_motion, robot, None)(p.direct))
         row = {"clip": name, "idempotence": rms, "kp_mm": gap, "direct": direct, "same": min(p.rounds),
-               "rounds": f"{len(p.solver_rounds)}+{len(p.rounds)}",
+               "rounds": "exact" if p.reached else f"{len(p.solver_rounds)}+{len(p.rounds)}",
                "noise": noise,
                "legs": legs_of(p.robot_motion),
                "tempo": float(p.robot_motion.meta.get("tempo", 1.0)),

@@ -72,8 +72,8 @@ def test_the_model_passes_on_what_the_retargeter_passes_on() -> None:
 
     robot = _robot()
     human, motion = _clip()
-    model = attenuation(motion, robot, RetargetOptions())
-    solve = chosen_solve(motion, robot, RetargetOptions())
+    model = attenuation(motion, robot, RetargetOptions(reach=False))
+    solve = chosen_solve(motion, robot, RetargetOptions(reach=False))
     base = project_motion(motion, robot, human)
     again = solve(base)
     for joint in ("l_el", "head_tilt"):
@@ -94,9 +94,9 @@ def test_aimed_rounds_converge_where_plain_rounds_crawl() -> None:
 
     robot = _robot()
     human, motion = _clip()
-    solve = chosen_solve(motion, robot, RetargetOptions())
+    solve = chosen_solve(motion, robot, RetargetOptions(reach=False))
     direct = project_motion(motion, robot, human)
-    model = attenuation(motion, robot, RetargetOptions())
+    model = attenuation(motion, robot, RetargetOptions(reach=False))
     _, plain = refine(direct, motion, robot, solve)
     best, aimed = refine(direct, motion, robot, solve, aim=model.aim)
     assert min(aimed) < 0.6 * min(plain) and min(aimed) < 0.003
@@ -134,8 +134,8 @@ def test_a_steps_result_passes_its_root_and_legs_as_they_are() -> None:
 
     robot = _robot()
     motion = _walked(robot)
-    solved = attenuation(motion, robot, RetargetOptions()).share
-    walked = attenuation(motion, robot, RetargetOptions(), tracked_legs=False).share
+    solved = attenuation(motion, robot, RetargetOptions(reach=False)).share
+    walked = attenuation(motion, robot, RetargetOptions(reach=False), tracked_legs=False).share
     laid = np.concatenate([np.ones(6, dtype=bool), foot_ancestor_mask(robot).any(axis=1)])
     assert np.array_equal(walked[:, laid][:, :, laid], np.broadcast_to(np.eye(laid.sum()), walked[:, laid][:, :, laid].shape))
     assert np.all(walked[:, laid][:, :, ~laid] == 0.0) and np.all(walked[:, ~laid][:, :, laid] == 0.0)

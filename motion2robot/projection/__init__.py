@@ -148,6 +148,8 @@ class Projection:
         ``human'`` (the smallest is ``human``'s, the best round's; see :func:`refine`).
     solver_rounds: the same for the first phase of the correction, against the retargeting's
         solves alone (:func:`solver_stages`: the pipeline cut before its servo rounds).
+    reached: ``human'`` is the direct mapping, which the retargeting reaches exactly
+        (:mod:`~motion2robot.retarget.reach`): no correction ran (``rounds`` holds its one RMS).
     """
 
     human: HumanMotion
@@ -159,6 +161,7 @@ class Projection:
     direct: HumanMotion
     rounds: tuple[float, ...] = ()
     solver_rounds: tuple[float, ...] = ()
+    reached: bool = False
 
     @property
     def idempotence_rms(self) -> float | None:
@@ -225,6 +228,21 @@ def _aim(motion: RobotMotion, robot: Robot, options: Any):
     return aim
 
 
+def _reached(direct: HumanMotion, motion: RobotMotion, robot: Robot, options: Any) -> float | None:
+    """Hinge RMS (rad) between ``motion`` and the exact poses of ``direct`` (the robot's own
+    keypoints mapped back: robot-shaped when it keeps the robot's frames, at x1.0), or None when
+    the retargeting does not reach ``direct`` exactly (a slowed motion's frames fall between the
+    human's; ``reach`` off; another rate)."""
+    from motion2robot.retarget.api import RetargetOptions
+    from motion2robot.retarget.exact import exact_motion
+
+    opt = options or RetargetOptions()
+    if float(motion.meta.get("tempo") or 1.0) != 1.0 or (opt.fps is not None and abs(opt.fps - direct.fps) > 1e-9):
+        return None
+    exact = exact_motion(direct, robot, opt)
+    return None if exact is None else hinge_rms(exact, motion)
+
+
 def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, check_options: Any = None,
             layout: str = "humanml3d_joints", fps: float | None = None, mean: Any = None, std: Any = None,
             rounds: int = ROUNDS, tolerance: float = TOLERANCE) -> Projection:
@@ -245,12 +263,18 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     rb = robot if isinstance(robot, Robot) else load_robot(robot)
     robot_motion, report = retarget_and_check(human, rb, options, check_options)
     direct = project_motion(robot_motion, rb, human)
-    aim = _aim(robot_motion, rb, options)
-    solved, solver_errors = refine(direct, robot_motion, rb, chosen_solve(robot_motion, rb, solver_stages(options)),
-                                   rounds, tolerance * SOLVER_TOLERANCE, aim=aim)
-    projected, errors = refine(solved, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds, tolerance,
-                               aim=aim, reference=direct)
+    reached = _reached(direct, robot_motion, rb, options)
+    if reached is not None and reached <= tolerance:  # the retargeting reaches the robot's poses exactly
+        projected, errors, solver_errors = direct, (reached,), ()
+    else:
+        reached = None
+        aim = _aim(robot_motion, rb, options)
+        solved, solver_errors = refine(direct, robot_motion, rb,
+                                       chosen_solve(robot_motion, rb, solver_stages(options)),
+                                       rounds, tolerance * SOLVER_TOLERANCE, aim=aim)
+        projected, errors = refine(solved, robot_motion, rb, chosen_solve(robot_motion, rb, options), rounds,
+                                   tolerance, aim=aim, reference=direct)
     positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
     return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
                       distance=joint_distance(human.positions, projected.positions), positions=positions,
-                      direct=direct, rounds=errors, solver_rounds=solver_errors)
+                      direct=direct, rounds=errors, solver_rounds=solver_errors, reached=reached is not None)
