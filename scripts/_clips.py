@@ -15,10 +15,14 @@ from motion2robot.motion import read_motion
 from motion2robot.motion.human import HumanMotion
 
 
-def readable_clips(folder: str | Path, limit: int | None = None) -> Iterator[tuple[str, HumanMotion]]:
-    """(display name, clip) of the first ``limit`` work items of ``folder`` that read."""
+def readable_clips(folder: str | Path, limit: int | None = None,
+                   only: list[str] | None = None) -> Iterator[tuple[str, HumanMotion]]:
+    """(display name, clip) of the first ``limit`` work items of ``folder`` that read (with
+    ``only``: those whose display name contains one of its strings)."""
     for item in list(expand_inputs([str(folder)]).items)[:limit]:
         name = Path(item.path).name + ("" if item.clip in (None, 0) else f"#{item.clip}")
+        if only and not any(o in name for o in only):
+            continue
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -34,11 +38,13 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "motions"
 
 
 def clips_parser(doc: str) -> argparse.ArgumentParser:
-    """The arguments every clip benchmark takes: --robot, --motions, --limit, --csv."""
+    """The arguments every clip benchmark takes: --robot, --motions, --limit, --only, --csv."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--robot", default="op3")
     ap.add_argument("--motions", default=str(SHARED))
     ap.add_argument("--limit", type=int, default=None, help="first N clips only")
+    ap.add_argument("--only", action="append", default=None, metavar="TEXT",
+                    help="only the clips whose name contains TEXT (repeatable)")
     ap.add_argument("--csv", default=None)
     return ap
 

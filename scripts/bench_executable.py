@@ -142,7 +142,7 @@ def main() -> int:
     retarget(read_motion(items[0].path, clip=items[0].clip)[0], robot, opts)  # compile outside the timing
     rows = []
     cpu_new = cpu_base = frames_total = 0.0
-    for name, human in readable_clips(args.motions, args.limit):
+    for name, human in readable_clips(args.motions, args.limit, args.only):
         c0 = time.process_time()
         try:
             motion = retarget(human, robot, opts)

@@ -86,7 +86,7 @@ def main() -> int:
     print(f"{'clip':44s} {'idem rad':>9s} {'kp mm':>6s} {'direct':>7s} {'same':>7s} {'rnds':>5s} {'legs':>6s} "
           f"{'noise':>7s} {'exe before':>10s} {'after':>5s} "
           f"{'dist cm':>7s} {'worst joint':>20s} {'time s':>6s}")
-    for name, human in readable_clips(args.motions, args.limit):
+    for name, human in readable_clips(args.motions, args.limit, args.only):
         t0 = time.perf_counter()
         try:
             p = project(human, robot, rounds=args.rounds)

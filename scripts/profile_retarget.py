@@ -83,7 +83,7 @@ def main() -> int:
     if motions_missing(args.motions):
         return 2
     robot = load_robot(args.robot)
-    clips = list(readable_clips(args.motions, args.limit))
+    clips = list(readable_clips(args.motions, args.limit, args.only))
     if args.clips:
         clips = [clips[int(i)] for i in args.clips.split(",")]
     rapi.retarget(clips[0][1], robot)  # compile/load outside the timing

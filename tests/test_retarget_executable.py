@@ -243,7 +243,8 @@ def test_a_gliding_thrower_tries_its_steps_then_the_stance_before_slowing(op3):
     """MDM's throw #5 glides 5 m (its pelvis travels), but its steps keep 4 % of their length
     (told by the steps' first stage): a glide. At the first tempo its steps go first, as for any
     clip that travels (on the gliding throws they were 1.6-3.8 cm nearer than the stance), pass
-    and are kept, the glide noted; throw #22 travels and steps (not a glide) and is slowed."""
+    and are kept, the glide noted; throw #22 travels and steps (not a glide) and is slowed, then replayed at x1.0,
+    which passes."""
     from motion2robot.retarget.executable import GLIDE_SHARE
 
     clips = MOTIONS / "mdm_results" / "mdm_throw_ball_results.npy"
@@ -253,7 +254,8 @@ def test_a_gliding_thrower_tries_its_steps_then_the_stance_before_slowing(op3):
     assert [s["legs"] for s in motion.meta["legs_skipped"] if s.get("set_aside")] == ["steps"]
     assert motion.meta["solver"]["steps"]["step_factor"] < GLIDE_SHARE and "nearness" not in motion.meta
     slowed = retarget(read_motion(clips, clip=22)[0], op3)
-    assert [(a["legs"], a["tempo"]) for a in slowed.meta["attempts"]] == [("steps", 1.0), ("steps", 1.25)]
+    assert [(a["legs"], a["tempo"]) for a in slowed.meta["attempts"]] == [("steps", 1.0), ("steps", 1.25), ("steps", 1.0)]
+    assert slowed.meta["replayed"] == {"from_tempo": 1.25} and slowed.meta["tempo"] == 1.0  # replayed at x1.0
     assert slowed.meta["solver"]["steps"]["step_factor"] >= GLIDE_SHARE
 
 

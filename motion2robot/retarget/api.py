@@ -91,8 +91,14 @@ def retarget_and_check(human: HumanMotion, robot: Robot, options: RetargetOption
             return finish(sketched.pop(id(h)))
         return solve_legs(h, robot, inner, legs)
 
+    def replay(motion: RobotMotion) -> HumanMotion:
+        from motion2robot.projection.mapping import project_motion  # the way back sits above the retargeter
+
+        return project_motion(motion, robot, human)
+
     reached = exact_motion(human, robot, inner) if opt.legs == "auto" else None
-    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe, sketch, reached)
+    return plan(human, robot, opt.tempo, opt.legs, opt.tempo_cap, solve, check_options, probe, sketch, reached,
+                replay if opt.replay else None)
 
 
 def solve_legs(human: HumanMotion, robot: Robot, options: RetargetOptions, legs: str) -> RobotMotion:

@@ -37,6 +37,15 @@ attempt that passes, in this order:
    the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
    them with a foot always on the floor.
 
+A slowed pass is **replayed** at the generated tempo before it is kept: its own keypoints, mapped back
+into the human's space at the human's tempo (the way back of :mod:`~motion2robot.projection`),
+are retargeted in its legs mode at x1.0 and judged; when that passes it is chosen instead
+(``meta["replayed"]`` says from which tempo). The slow pass did what the human's raw motion
+could not at x1.0 (its feet planned, its poses made followable at a pace that allows it); at the
+human's pace those poses are often still within the robot's reach (2 of 8 slowed dev clips
+keep x1.0 this way), and a robot motion whose poses are the robot's own is what projection
+makes of it, so ``project`` is then exact (:mod:`~.reach`) rather than approximate.
+
 Nothing is silent: the result's meta says the tempo factor (``tempo``, 1.0 = as generated), why
 (``tempo_reason``), the alternative taken (``fallback``: None, or {"mode", "why"}) and whether the
 chosen attempt passed (``executable``). When no attempt passes, the one failing the fewest checks
@@ -54,7 +63,7 @@ from motion2robot.motion.human import HumanMotion
 from motion2robot.retarget.contacts import contact_labels
 from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
-from motion2robot.retarget.nearness import keypoint_error
+from motion2robot.retarget.nearness import compare, nearness_words, steps_nearer
 from motion2robot.retarget.options import LEG_MODES
 from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
@@ -91,6 +100,7 @@ class Attempt:
     factor: float
     motion: RobotMotion
     report: object | None  # FeasibilityReport, or None when not judged
+    replay_of: float | None = None  # the slowed tempo factor this x1.0 attempt replays
 
     @property
     def feasible(self) -> bool:
@@ -165,6 +175,18 @@ def _search(make: Callable[[float], Attempt], factors: list[float],
     return last, tried
 
 
+def _replayed(slowed: Attempt, replay: Callable[[RobotMotion], HumanMotion], solve: Solve,
+              judge: Callable[[RobotMotion], object]) -> Attempt | None:
+    """The ``slowed`` attempt replayed at x1.0 (see the module text): ``replay(motion)`` its
+    keypoints in the human's space at the human's tempo, retargeted in its legs mode and judged;
+    None when its legs give no pattern there."""
+    try:
+        motion = solve(replay(slowed.motion), slowed.legs)
+    except PatternError:
+        return None
+    return Attempt(slowed.legs, 1.0, motion, judge(motion), replay_of=slowed.factor)
+
+
 def _words(failed: list[str]) -> str:
     return ", ".join(failed) if failed else "nothing"
 
@@ -198,41 +220,6 @@ def legs_of(motion: RobotMotion) -> str:
     return str(fallback["mode"]) if isinstance(fallback, Mapping) and fallback.get("mode") else "whole"
 
 
-def _compare(stance: RobotMotion, steps: Callable[[], RobotMotion], tempo: float, human: HumanMotion,
-             robot: Robot) -> dict:
-    """What the ``stance`` and the steps (``steps()``) of one tempo measure against ``human`` (the
-    human at that tempo; :func:`~.nearness.keypoint_error`): {"tempo", "keypoint_error_m":
-    {mode: m}}, or {"tempo", "steps": why} when the clip gives no walking pattern."""
-    figures: dict = {"tempo": tempo}
-    try:
-        steps = steps()
-    except PatternError as err:  # a foot never down: no pattern to compare
-        return {**figures, "steps": str(err)}
-    error = {"stance": keypoint_error(stance, human, robot), "steps": keypoint_error(steps, human, robot)}
-    return {**figures, "keypoint_error_m": {k: round(v, 5) for k, v in error.items()}}
-
-
-def _steps_nearer(nearness: dict | None) -> bool:
-    error = (nearness or {}).get("keypoint_error_m")
-    return bool(error) and error["steps"] < error["stance"]
-
-
-def _nearness_words(nearness: dict | None, final: Attempt) -> list[str]:
-    """The fallback's words on the comparison of :func:`_compare` (none when there was none, or
-    the steps were nearer but failed: the attempts say so)."""
-    error = (nearness or {}).get("keypoint_error_m")
-    if not error:
-        return []
-    cm = (f"keypoint error {100 * error['steps']:.1f} cm vs the stance's {100 * error['stance']:.1f} cm"
-          + (" after its solves" if nearness.get("stance_measured") == "solves" else ""))
-    at = f"x{nearness['tempo']:.2f}"
-    if not _steps_nearer(nearness):
-        return [f"steps at {at} are farther from the human ({cm})"]
-    if final.legs == "steps" and final.factor == nearness["tempo"]:
-        return [f"the steps at {at} are nearer to the human than the stance, which goes first for its tempo ({cm})"]
-    return []
-
-
 def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], robot: Robot,
               skipped: list[dict], nearness: dict | None = None) -> dict | None:
     """meta["fallback"] of the returned attempt: None for the whole body, else what was done and why."""
@@ -251,7 +238,7 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
                         + [f"{mode} fails at every tempo tried up to x{runs[-1].factor:.2f} ({_words(runs[-1].failed())})"
                            for mode in AUTO_LEGS if (runs := [a for a in tried if a.legs == mode])
                            and mode != final.legs and mode not in noted and not any(a.feasible for a in runs)]
-                        + _nearness_words(nearness, final))
+                        + nearness_words(nearness, final.legs, final.factor))
     if final.legs == "steps":
         walk = (final.motion.meta.get("solver") or {}).get("steps") or {}
         what = (f"the legs walk the human's footsteps as a walking pattern: steps shortened to "
@@ -267,7 +254,8 @@ def _fallback(final: Attempt, legs: str, flight: bool, tried: list[Attempt], rob
 def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: float, solve: Solve,
          check_options: object | None = None, probe: Callable[[HumanMotion], float] | None = None,
          sketch: Callable[[HumanMotion], RobotMotion] | None = None,
-         reached: RobotMotion | None = None) -> tuple[RobotMotion, object | None]:
+         reached: RobotMotion | None = None,
+         replay: Callable[[RobotMotion], HumanMotion] | None = None) -> tuple[RobotMotion, object | None]:
     """The chosen robot motion and its report (None when neither tempo nor legs is ``auto``: one
     attempt, not judged). ``solve(human, legs)``: the robot motion of a legs mode at the human's
     tempo; ``check_options``: the judge's CheckOptions (default: every check with the physics
@@ -275,8 +263,9 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     it, no glide is told apart); ``sketch(human)``: the stance of ``human`` after its solves alone
     (what the comparison with the steps measures; without it, the whole stance; ``solve`` is then
     expected to go on from that sketch); ``reached``: the exact poses of a robot-shaped ``human``
-    at its own tempo (:mod:`~.exact`), judged first as its whole body. See the module text for the
-    order of attempts."""
+    at its own tempo (:mod:`~.exact`), judged first as its whole body; ``replay(motion)``: a slowed
+    robot motion's keypoints in the human's space at the human's tempo (without it, nothing is
+    replayed). See the module text for the order of attempts."""
     factors = _factors(tempo, cap, human, robot)
     judging = tempo == "auto" or legs == "auto"
     judge = _judge(robot, check_options) if judging else (lambda motion: None)
@@ -345,9 +334,9 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
                 # the stance goes first for its tempo: the steps of that tempo are made too, and
                 # judged first when nearer
                 stood = sketch(at(factors[0])) if sketch is not None else solved("stance")
-                nearness = _compare(stood, lambda: solved("steps"), factors[0], at(factors[0]), robot)
+                nearness = compare(stood, lambda: solved("steps"), factors[0], at(factors[0]), robot)
                 nearness["stance_measured"] = "solves" if sketch is not None else "whole"
-                if _steps_nearer(nearness):
+                if steps_nearer(nearness):
                     walked = attempt("steps", factors[0])
                     tried.append(walked)
                     if walked.feasible:
@@ -363,13 +352,19 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         if ok is not None:
             chosen = ok
             break
+    if chosen is not None and chosen.factor > 1.0 and tempo == "auto" and replay is not None:
+        again = _replayed(chosen, replay, solve, judge)
+        if again is not None:
+            tried.append(again)
+            chosen = again if again.feasible else chosen
     # nothing passes: the attempt failing the fewest checks (the later one on a tie: slower, and
     # the stance after the steps, as a user would rather have it)
     final = chosen or min(reversed(tried), key=lambda a: len(a.failed()))
     meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
                   "executable": None if final.report is None else final.feasible,
                   "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
-                                "failed": a.failed()} for a in tried]}
+                                "failed": a.failed(), **({"replay_of": a.replay_of} if a.replay_of else {})}
+                               for a in tried]}
     if skipped:
         meta["legs_skipped"] = skipped
     if nearness:
@@ -380,6 +375,11 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     elif chosen is None:
         meta["tempo_reason"] = (f"no attempt passes up to the tempo cap x{cap:g}: at x{final.factor:.2f} "
                                 f"({final.legs} legs) {_words(final.failed())} still fail")
+    elif final.replay_of:
+        meta["replayed"] = {"from_tempo": final.replay_of}
+        meta["tempo_reason"] = (f"played at the generated tempo (x1.00): the robot's motion slowed x{final.replay_of:.2f} "
+                                "(the smallest slow-down that passes), replayed at the generated tempo and retargeted "
+                                "again, passes the checks")
     elif final.factor == 1.0:
         meta["tempo_reason"] = "played at the generated tempo (x1.00): it passes the checks as generated"
     else:

@@ -6,14 +6,18 @@ world frame, z up) between the robot's keypoint sites and the human's keypoints 
 robot (:func:`~.scale.scaled_keypoints`), over frames and keypoints. Both modes are measured
 against the same targets, the human's at the attempt's tempo with the scale computed from that
 human (a ``stance`` attempt's own setup tracks the stanced legs, so its solver residual is not
-comparable with a ``steps`` attempt's).
+comparable with a ``steps`` attempt's). :func:`compare` makes the policy's comparison,
+:func:`nearness_words` says what it found in the fallback's words.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from motion2robot.motion.human import KP, HumanMotion
+from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.scale import Scale, auto_scale, scaled_keypoints
 from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
@@ -44,3 +48,38 @@ def keypoint_error(motion: RobotMotion, human: HumanMotion, robot: Robot, scale:
     if pose:
         sites, target = centred(sites, robot.keypoints), centred(target, robot.keypoints)
     return mean_distance(sites, target)
+
+
+def compare(stance: RobotMotion, steps: Callable[[], RobotMotion], tempo: float, human: HumanMotion,
+             robot: Robot) -> dict:
+    """What the ``stance`` and the steps (``steps()``) of one tempo measure against ``human`` (the
+    human at that tempo; :func:`keypoint_error`): {"tempo", "keypoint_error_m":
+    {mode: m}}, or {"tempo", "steps": why} when the clip gives no walking pattern."""
+    figures: dict = {"tempo": tempo}
+    try:
+        steps = steps()
+    except PatternError as err:  # a foot never down: no pattern to compare
+        return {**figures, "steps": str(err)}
+    error = {"stance": keypoint_error(stance, human, robot), "steps": keypoint_error(steps, human, robot)}
+    return {**figures, "keypoint_error_m": {k: round(v, 5) for k, v in error.items()}}
+
+
+def steps_nearer(nearness: dict | None) -> bool:
+    error = (nearness or {}).get("keypoint_error_m")
+    return bool(error) and error["steps"] < error["stance"]
+
+
+def nearness_words(nearness: dict | None, legs: str, factor: float) -> list[str]:
+    """The fallback's words on the comparison of :func:`compare` (none when there was none, or
+    the steps were nearer but failed: the attempts say so)."""
+    error = (nearness or {}).get("keypoint_error_m")
+    if not error:
+        return []
+    cm = (f"keypoint error {100 * error['steps']:.1f} cm vs the stance's {100 * error['stance']:.1f} cm"
+          + (" after its solves" if nearness.get("stance_measured") == "solves" else ""))
+    at = f"x{nearness['tempo']:.2f}"
+    if not steps_nearer(nearness):
+        return [f"steps at {at} are farther from the human ({cm})"]
+    if legs == "steps" and factor == nearness["tempo"]:
+        return [f"the steps at {at} are nearer to the human than the stance, which goes first for its tempo ({cm})"]
+    return []

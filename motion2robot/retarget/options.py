@@ -48,7 +48,9 @@ class RetargetOptions:
     and of the other foot); off = soles pinned in contact frames only, free otherwise.
     reach: a robot-shaped human motion (every keypoint reachable exactly in one pose a frame, as
     ``project`` makes) is retargeted to exactly those poses (:mod:`~motion2robot.retarget.reach`;
-    off = solved like any other)."""
+    off = solved like any other). replay: with tempo "auto", a slowed pass is replayed at the
+    generated tempo (its keypoints in the human's space, retargeted again) and kept at x1.0 when
+    that passes (:mod:`~motion2robot.retarget.executable`); off = the slowed pass is kept."""
 
     balance: bool = True
     fps: float | None = None
@@ -69,6 +71,7 @@ class RetargetOptions:
     legs: str = "auto"
     lift_feet: bool = True
     reach: bool = True
+    replay: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "tempo", parse_tempo(self.tempo))

@@ -22,8 +22,10 @@ microseconds, before any solve (:func:`robot_scale`).
 2. **pose** (:func:`reach_poses`): Gauss-Newton on the keypoint residual alone, the root placed
    by the best rigid fit of the nominal pose to frame 0's targets, each frame from the one
    before. A frame is reached when its largest keypoint residual is below TOLERANCE_M, every
-   hinge is within its limits, and the keypoint Jacobian has full rank (RANK_TOLERANCE: no joint
-   the keypoints leave free, so the pose is the motion's, not one of many).
+   hinge is within its limits, and the joints the residual can hide (its norm over the keypoint
+   Jacobian's smallest singular value) stay below JOINT_TOLERANCE: no joint the keypoints leave
+   free, so the pose is the motion's, not one of many (a straight arm or leg leaves the
+   Jacobian ill-conditioned, not singular: reached to rounding, its pose is still fixed).
 
 Units: metres (robot scale), radians; world frame z up.
 """
@@ -44,9 +46,11 @@ from motion2robot.robot.robot import Robot
 TOLERANCE_M = 1e-6
 #: Relative spread allowed between the scale ratios the rigid bones give, over bones and frames.
 RATIO_TOLERANCE = 1e-6
-#: A frame's keypoint Jacobian is full rank when its smallest singular value is at least this
-#: (m/rad; a joint that moves no keypoint has 0).
-RANK_TOLERANCE = 1e-3
+#: rad: the largest joint error a reached frame's residual may leave (its norm over the keypoint
+#: Jacobian's smallest singular value, m / (m/rad); a joint that moves no keypoint: infinite).
+#: A tenth of the projection's idempotence tolerance, above what float32 targets leave (a
+#: sampler's tensors: about 1e-5 rad where the Jacobian is well conditioned).
+JOINT_TOLERANCE = 1e-4
 #: rad: a hinge this little past a limit is on it (the targets' rounding) and is put back on it.
 LIMIT_SLACK = 1e-6
 #: Gauss-Newton iterations per frame at most (a reachable frame converges in 2-5 from the last).
@@ -156,7 +160,7 @@ def _reach_frame(robot: Robot, data: mujoco.MjData, q: np.ndarray, target: np.nd
     jac = np.zeros((3 * len(robot.keypoint_sites), robot.model.nv))
     for _ in range(ITERATIONS):
         r = (target - _kinematics(robot, data, q)).ravel()
-        if np.abs(r).max() < TOLERANCE_M * 1e-2:
+        if np.abs(r).max() < 1e-13:  # float64 rounding of the kinematics at a robot's size
             break
         mujoco.mj_comPos(robot.model, data)
         J = _jacobian(robot, data, jac)
@@ -171,10 +175,12 @@ def _reach_frame(robot: Robot, data: mujoco.MjData, q: np.ndarray, target: np.nd
     if np.any(hinges < robot.lower - LIMIT_SLACK) or np.any(hinges > robot.upper + LIMIT_SLACK):
         return False
     q[7:] = np.clip(hinges, robot.lower, robot.upper)  # a pose on a limit, reached to rounding
-    if not np.linalg.norm(target - _kinematics(robot, data, q), axis=-1).max() < TOLERANCE_M:
+    r = target - _kinematics(robot, data, q)
+    if not np.linalg.norm(r, axis=-1).max() < TOLERANCE_M:
         return False
     mujoco.mj_comPos(robot.model, data)
-    return bool(np.linalg.svd(_jacobian(robot, data, jac), compute_uv=False)[-1] >= RANK_TOLERANCE)
+    smallest = np.linalg.svd(_jacobian(robot, data, jac), compute_uv=False)[-1]
+    return bool(np.linalg.norm(r) <= JOINT_TOLERANCE * smallest)
 
 
 def reach_poses(targets: np.ndarray, robot: Robot) -> np.ndarray | None:
