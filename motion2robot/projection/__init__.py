@@ -263,11 +263,11 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     rb = robot if isinstance(robot, Robot) else load_robot(robot)
     robot_motion, report = retarget_and_check(human, rb, options, check_options)
     direct = project_motion(robot_motion, rb, human)
-    reached = _reached(direct, robot_motion, rb, options)
-    if reached is not None and reached <= tolerance:  # the retargeting reaches the robot's poses exactly
-        projected, errors, solver_errors = direct, (reached,), ()
+    rms = _reached(direct, robot_motion, rb, options)
+    reached = rms is not None and rms <= tolerance  # the retargeting reaches the robot's poses exactly
+    if reached:
+        projected, errors, solver_errors = direct, (rms,), ()
     else:
-        reached = None
         aim = _aim(robot_motion, rb, options)
         solved, solver_errors = refine(direct, robot_motion, rb,
                                        chosen_solve(robot_motion, rb, solver_stages(options)),
@@ -277,4 +277,4 @@ def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, che
     positions = from_canonical(human.meta.get("canonical_transform"), projected.positions)
     return Projection(human=projected, original=human, robot_motion=robot_motion, report=report,
                       distance=joint_distance(human.positions, projected.positions), positions=positions,
-                      direct=direct, rounds=errors, solver_rounds=solver_errors, reached=reached is not None)
+                      direct=direct, rounds=errors, solver_rounds=solver_errors, reached=reached)

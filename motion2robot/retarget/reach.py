@@ -81,7 +81,9 @@ def _kinematics(robot: Robot, data: mujoco.MjData, q: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=16)
-def _rigid_bones(robot: Robot) -> tuple[RigidBone, ...]:
+def rigid_bones(robot: Robot) -> tuple[RigidBone, ...]:
+    """The robot's rigid keypoint pairs along the SMPL22 tree (each child with its nearest tracked
+    ancestor, the path between them in one scale group)."""
     mapped = {KP[k]: i for i, k in enumerate(robot.keypoints)}
     rng = np.random.default_rng(0)
     data = mujoco.MjData(robot.model)
@@ -101,12 +103,6 @@ def _rigid_bones(robot: Robot) -> tuple[RigidBone, ...]:
         if d.max() - d.min() < RIGID_M and d[0] > 1e-6:
             bones.append(RigidBone(j, child, groups.pop(), float(d[0])))
     return tuple(bones)
-
-
-def rigid_bones(robot: Robot) -> tuple[RigidBone, ...]:
-    """The robot's rigid keypoint pairs along the SMPL22 tree (each child with its nearest tracked
-    ancestor, the path between them in one scale group)."""
-    return _rigid_bones(robot)
 
 
 def robot_scale(positions: np.ndarray, robot: Robot) -> Scale | None:
