@@ -151,6 +151,16 @@ def _jacobian(robot: Robot, data: mujoco.MjData, jac: np.ndarray) -> np.ndarray:
     return jac
 
 
+def _held(robot: Robot, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
+    """(nv,) bool: the hinges on a limit (put there by the iteration's clip) that the step ``dv``
+    pushes past it (projected Gauss-Newton: with the step clipped instead, such a hinge stalled the
+    other joints short of a pose on the limit, a shoulder roll at its end)."""
+    hinges, step = q[7:], dv[6:]
+    out = np.zeros(len(dv), dtype=bool)
+    out[6:] = ((hinges <= robot.lower) & (step < 0)) | ((hinges >= robot.upper) & (step > 0))
+    return out
+
+
 def _reach_frame(robot: Robot, data: mujoco.MjData, q: np.ndarray, target: np.ndarray) -> bool:
     """Gauss-Newton in place on ``q`` towards ``target`` (k, 3); True when reached (see the module text)."""
     jac = np.zeros((3 * len(robot.keypoint_sites), robot.model.nv))
@@ -161,12 +171,16 @@ def _reach_frame(robot: Robot, data: mujoco.MjData, q: np.ndarray, target: np.nd
         mujoco.mj_comPos(robot.model, data)
         J = _jacobian(robot, data, jac)
         dv = np.linalg.lstsq(J, r, rcond=None)[0]
+        held = _held(robot, q, dv)
+        if held.any():  # a hinge on a limit the step would push past stays there: the step without it
+            dv = np.zeros_like(dv)
+            dv[~held] = np.linalg.lstsq(J[:, ~held], r, rcond=None)[0]
         size = float(np.abs(dv).max())
         if size < 1e-12:  # converged to the least-squares pose (a target rounded to float32, say)
             break
         dv *= min(1.0, MAX_STEP / size)
         mujoco.mj_integratePos(robot.model, q, dv, 1.0)
-        q[7:] = np.clip(q[7:], robot.lower - LIMIT_SLACK, robot.upper + LIMIT_SLACK)
+        q[7:] = np.clip(q[7:], robot.lower, robot.upper)  # on a limit, held there (:func:`_held`)
     hinges = q[7:]
     if np.any(hinges < robot.lower - LIMIT_SLACK) or np.any(hinges > robot.upper + LIMIT_SLACK):
         return False
