@@ -14,7 +14,8 @@ and runs the full ``check`` with the physics playback. Prints per clip and in to
 - the quasi-static clips (pelvis within 0.5 m of its start): how many keep the tempo (x1.00) and
   how much keypoint error they lose against the kinematic-only retarget (the target: < 20 %);
 - retargeting speed in frames per CPU second, beside the kinematic-only figure (same run);
-- artefacts: the chosen tempo and legs retargeted again at 100 fps, whose peak root and joint
+- artefacts: the clip retargeted again at 100 fps the way it was (its tempo, legs and replay:
+  :func:`~motion2robot.retarget.remake.remake`), whose peak root and joint
   accelerations must stay within 1.5x of the native rate's (``--no-artefacts`` skips it); a clip
   over 1.5x gets the ratio split in two: sampling (the natural cubic spline through the native
   frames, its peak over their second difference's: what the native rate does not show of its own
@@ -38,6 +39,7 @@ from motion2robot.batch.work import expand_inputs
 from motion2robot.motion import read_motion
 from motion2robot.retarget import RetargetOptions, retarget
 from motion2robot.retarget.nearness import keypoint_error
+from motion2robot.retarget.remake import remake
 from motion2robot.retarget.tempo import stretch
 from motion2robot.robot import load_robot
 from motion2robot.validate import CheckOptions, check
@@ -173,8 +175,7 @@ def main() -> int:
             row["pose_base_mm"] = keypoint_error_mm(base, human, robot, True)
             row["path_err_m"] = path_error(motion, base)
         if not args.no_artefacts:
-            fine_opts = RetargetOptions(fps=100.0, tempo=row["tempo"], legs=(row["fallback"] or {}).get("mode", "whole"))
-            fine = retarget(human, robot, fine_opts)
+            fine = remake(human, robot, motion, RetargetOptions(fps=100.0))  # made as motion was (tempo, legs, replay)
             (rn, jn), (rf, jf) = peak_accelerations(motion), peak_accelerations(fine)
             rn, jn = max(rn, ROOT_FLOOR), max(jn, JOINT_FLOOR)  # a ratio of negligible peaks is no spike
             row["fine_ratio"] = max(rf / max(rn, 1e-9), jf / max(jn, 1e-9))

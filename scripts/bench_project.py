@@ -19,7 +19,7 @@ Per clip, prints:
 - the per-joint distance between ``human`` and ``human'`` (cm, mean over frames; mean over
   joints and the largest joint);
 - noise: the retargeting's own sensitivity, the floor under idempotence: RMS (rad) between the
-  robot motion of ``human`` and the retargeting (the same tempo and legs) of ``human`` moved by
+  robot motion of ``human`` and the retargeting (made the same way: tempo, legs, replay) of ``human`` moved by
   Gaussian noise of NOISE_M (0.01 mm, far below any capture's or generator's precision);
 - the time of ``project`` per clip (wall seconds, on a shared 2-core machine).
 
@@ -36,9 +36,8 @@ import numpy as np
 from _clips import clips_parser, motions_missing, readable_clips
 from motion2robot.motion.human import SMPL22
 from motion2robot.projection import ROUNDS, TOLERANCE, chosen_solve, hinge_rms, project, robot_points
-from motion2robot.retarget.api import RetargetOptions, solve_legs
 from motion2robot.retarget.executable import legs_of
-from motion2robot.retarget.tempo import stretch
+from motion2robot.retarget.remake import remake
 from motion2robot.retarget import retarget_and_check
 from motion2robot.robot import load_robot
 
@@ -48,18 +47,13 @@ from motion2robot.robot import load_robot
 NOISE_M = 1e-5
 
 
-def retarget_as(motion, human, robot):
-    """The retargeting of ``human`` at the tempo and legs ``motion`` was made with (no judging; a
-    stance result by the stance, unlike the correction's solve, whose ``human'`` already stands)."""
-    return solve_legs(stretch(human, float(motion.meta.get("tempo") or 1.0)), robot, RetargetOptions(), legs_of(motion))
-
-
 def sensitivity(p, robot) -> float:
-    """RMS (rad) between ``p``'s robot motion and the retargeting, at its tempo and legs, of its
-    human moved by NOISE_M Gaussian noise (a fixed seed)."""
+    """RMS (rad) between ``p``'s robot motion and the retargeting of its human moved by NOISE_M
+    Gaussian noise (a fixed seed), made as the robot motion was (:func:`remake`: its tempo, legs
+    and replay, nothing judged)."""
     h = p.original
     noisy = h.with_(positions=np.asarray(h.positions) + NOISE_M * np.random.default_rng(0).standard_normal(np.shape(h.positions)))
-    return hinge_rms(p.robot_motion, retarget_as(p.robot_motion, noisy, robot))
+    return hinge_rms(p.robot_motion, remake(noisy, robot, p.robot_motion))
 
 
 def _verdict(ok: bool | None) -> str:

@@ -424,19 +424,24 @@ def test_feature_input_comes_back_as_humanml3d_joints() -> None:
 
 
 @requires_shared
-def test_a_slowed_walk_comes_back_on_the_same_schedule() -> None:
-    """The CMU walk walks at x1.25: its schedule is made on the clip's own frames, so human'
-    (whose contacts are at those frames) is scheduled the same at x1.25 (made on the slowed
-    frames, the edges came back a frame off: 0.0019 rad), and its retargeting at that tempo and
-    legs is within TOLERANCE of the robot motion (measured 0.0001). (Its slowed steps replayed
-    pass at x1.0, which the default keeps: the replay is off here.)"""
+def test_a_slowed_walk_comes_back_at_its_tempo_exactly() -> None:
+    """The CMU walk walks at x1.25 (with the replay off: replayed, its steps pass at x1.0): human'
+    is the robot's poses at the human's frames, contacts where the walking schedule planted the
+    soles; its default retargeting plays those poses at x1.25 (the exact poses fail at x1.0), the
+    frames between interpolated in joint space: the robot motion again, within 1e-4 rad."""
     from motion2robot.motion import read_motion
-    from motion2robot.retarget import RetargetOptions, retarget
+    from motion2robot.projection.maths import robot_frames
+    from motion2robot.retarget import RetargetOptions, retarget_and_check
 
     robot = _robot()
     human = read_motion(MOTIONS / "bvh" / "cmu_cc_002_01_walk.bvh")[0]
-    p = project(human, robot, options=RetargetOptions(replay=False))  # replayed, it keeps x1.0
+    opts = RetargetOptions(replay=False)
+    p = project(human, robot, options=opts)
     assert p.robot_motion.meta["fallback"]["mode"] == "steps" and p.robot_motion.meta["tempo"] == 1.25
-    again = retarget(p.human, robot, RetargetOptions(tempo=1.25, legs="steps"))
-    np.testing.assert_array_equal(np.asarray(again.meta["schedule"]), np.asarray(p.robot_motion.meta["schedule"]))
-    assert hinge_rms(p.robot_motion, again) <= TOLERANCE
+    assert p.reached and p.idempotence_rms < 1e-4
+    u = robot_frames(human.num_frames, human.fps, p.robot_motion.fps, 1.25, p.robot_motion.num_frames)
+    schedule = np.asarray(p.robot_motion.meta["schedule"], dtype=bool)
+    np.testing.assert_array_equal(p.human.contacts, schedule[np.rint(u).astype(int)])
+    again, report = retarget_and_check(p.human, robot, opts)
+    assert again.meta["tempo"] == 1.25 and again.meta["retimed"] == {"from_tempo": 1.0} and report.feasible
+    assert hinge_rms(p.robot_motion, again) < 1e-4

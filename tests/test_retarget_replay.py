@@ -1,5 +1,6 @@
-"""The legs policy's replay: a slowed pass replayed at the generated tempo and kept there when
-that passes (motion2robot.retarget.executable)."""
+"""The tempo policy's replays (motion2robot.retarget.replay): a slowed pass re-solved at the
+generated tempo, else its poses played faster; the nearest attempt to passing re-solved; a
+robot-shaped motion's exact poses played slower."""
 
 from __future__ import annotations
 
@@ -14,60 +15,106 @@ from tests._shared import MOTIONS, requires_shared
 
 
 class _Report:
-    def __init__(self, ok: bool):
-        self.feasible, self.figures = ok, {}
-        self.checks = {} if ok else {"acceleration": {"ok": False}}
+    def __init__(self, failed: tuple[str, ...]):
+        self.feasible, self.figures = not failed, {}
+        self.checks = {name: {"ok": False} for name in failed}
 
 
 class _Motion:
-    def __init__(self, legs: str, k: float, replayed: bool):
-        self.legs, self.k, self.replayed, self.meta = legs, k, replayed, {}
+    def __init__(self, legs: str, k: float, replayed: bool = False, retimed_from: float | None = None):
+        self.legs, self.k, self.replayed, self.retimed_from, self.meta = legs, k, replayed, retimed_from, {}
 
     def with_(self, meta):
         self.meta = {**self.meta, **meta}
         return self
 
 
-def _plan(monkeypatch, replay_passes: bool):
-    """plan() with stand-ins: the whole body passes only slowed, or as a replay when
-    ``replay_passes``; the replay marks the human it gives back."""
+def _plan(monkeypatch, fails, cap: float = 1.25, reached: _Motion | None = None):
+    """plan() with stand-ins: ``fails(motion)`` the checks a stand-in motion fails (legs, tempo k,
+    replayed, retimed_from); the replay marks the human it gives back, a retime the motion it
+    plays. Returns the chosen motion and every motion judged, in order."""
     import motion2robot.retarget.executable as ex
+    import motion2robot.retarget.replay as rp
 
     T = 30
     pos = np.zeros((T, 22, 3))
     pos[:, :, 2] = 0.9
     human = HumanMotion(pos, 20.0, contacts=np.ones((T, 2), bool))
-    made = []
+    judged = []
 
     def solve(h, legs):
-        made.append((legs, round(h.num_frames / T, 2), bool(h.meta.get("replay"))))
-        return _Motion(*made[-1])
+        return _Motion(legs, float(h.meta.get("tempo", 1.0)), bool(h.meta.get("replay")))
 
     def judge(m):
-        return _Report(m.k > 1 or (m.replayed and replay_passes))
+        judged.append(m)
+        return _Report(tuple(fails(m)))
 
     monkeypatch.setattr(ex, "short_shifts", lambda *a: None)
     monkeypatch.setattr(ex, "_judge", lambda robot, options, full=False: judge)
+    monkeypatch.setattr(rp, "retime", lambda m, robot, k, n, made_at=None: _Motion(m.legs, k, False, made_at or 1.0))
     replay = lambda m: human.with_(meta={"replay": True})  # noqa: E731
-    motion, _ = ex.plan(human, None, "auto", "auto", 1.25, solve, replay=replay)
-    return motion, made
+    motion, _ = ex.plan(human, None, "auto", "auto", cap, solve, reached=reached, replay=replay)
+    return motion, judged
+
+
+def _slow(m) -> tuple[str, ...]:
+    """Passes only slowed (solved at a slower tempo)."""
+    return () if m.k > 1 and m.retimed_from is None else ("acceleration",)
 
 
 def test_a_slowed_pass_that_passes_replayed_is_kept_at_the_generated_tempo(monkeypatch):
-    motion, made = _plan(monkeypatch, replay_passes=True)
-    assert made[-1] == ("whole", 1.0, True) and motion.replayed
+    motion, judged = _plan(monkeypatch, lambda m: () if m.replayed else _slow(m))
+    assert judged[-1].replayed and motion.replayed
     assert motion.meta["tempo"] == 1.0 and motion.meta["replayed"] == {"from_tempo": 1.25}
     assert motion.meta["attempts"][-1] == {"legs": "whole", "tempo": 1.0, "feasible": True, "failed": [],
                                            "replay_of": 1.25}
-    assert "replayed at the generated tempo" in motion.meta["tempo_reason"]
+    assert "(the smallest slow-down that passes), replayed at the generated tempo" in motion.meta["tempo_reason"]
 
 
-def test_a_replay_that_fails_leaves_the_slowed_pass(monkeypatch):
-    motion, made = _plan(monkeypatch, replay_passes=False)
-    assert made[-1] == ("whole", 1.0, True)  # tried, judged, not kept
-    assert motion.k > 1 and not motion.replayed and motion.meta["tempo"] == 1.25
-    assert "replayed" not in motion.meta and motion.meta["attempts"][-1]["replay_of"] == 1.25
+def test_a_replay_that_fails_leaves_the_slowed_pass_once_its_poses_fail_faster(monkeypatch):
+    motion, judged = _plan(monkeypatch, _slow)
+    assert [(m.k, m.replayed, m.retimed_from) for m in judged[-2:]] == [(1.0, True, None), (1.0, False, 1.25)]
+    assert motion.k > 1 and not motion.replayed and motion.retimed_from is None and motion.meta["tempo"] == 1.25
+    assert "replayed" not in motion.meta and "retimed" not in motion.meta
+    assert motion.meta["attempts"][-2]["replay_of"] == 1.25 and motion.meta["attempts"][-1]["retime_of"] == 1.25
     assert motion.meta["attempts"][-1]["failed"] == ["acceleration"]
+
+
+def test_a_slowed_pass_whose_poses_pass_faster_is_played_faster(monkeypatch):
+    """Slowed x2.5 passes, x1.6 solved fails; its poses at x1.6 pass (not at 1.0 or 1.25): kept there."""
+    def fails(m):
+        if m.retimed_from is not None:
+            return () if m.k >= 1.6 else ("torque_limits",)
+        return () if m.k >= 2.5 else ("torque_limits",)
+
+    motion, judged = _plan(monkeypatch, fails, cap=2.5)
+    assert motion.retimed_from == 2.5 and motion.k == 1.6
+    assert [m.k for m in judged if m.retimed_from] == [1.0, 1.25, 1.6]  # the fastest first
+    assert motion.meta["tempo"] == 1.6 and motion.meta["retimed"] == {"from_tempo": 2.5}
+    assert motion.meta["tempo_reason"].startswith("slowed x1.60: the robot's motion slowed x2.50")
+
+
+def test_nothing_passes_but_the_nearest_slowed_attempt_replayed(monkeypatch):
+    motion, judged = _plan(monkeypatch, lambda m: () if m.replayed else ("rollout",))
+    assert motion.replayed and motion.meta["tempo"] == 1.0 and motion.meta["executable"] is True
+    assert "(the nearest to passing, failing rollout), replayed" in motion.meta["tempo_reason"]
+    assert not any(m.retimed_from for m in judged)  # a failing attempt's poses are not played faster
+
+
+def test_a_robot_shaped_motion_failing_at_x1_is_played_slower_before_anything_is_solved(monkeypatch):
+    exact = _Motion("whole", 1.0)
+    motion, judged = _plan(monkeypatch, lambda m: () if m.retimed_from == 1.0 and m.k >= 1.25 else ("acceleration",),
+                           cap=2.5, reached=exact)
+    assert judged[0] is exact and [m.k for m in judged[1:]] == [1.25]  # nothing solved
+    assert motion.retimed_from == 1.0 and motion.meta["tempo"] == 1.25 and motion.meta["retimed"] == {"from_tempo": 1.0}
+    assert "the exact poses of this robot-shaped motion, played x1.25 slower" in motion.meta["tempo_reason"]
+
+
+def test_a_robot_shaped_motion_failing_a_tempo_proof_check_is_not_played_slower(monkeypatch):
+    exact = _Motion("whole", 1.0)
+    motion, judged = _plan(monkeypatch, lambda m: ("joint_limits",) if m is exact else _slow(m), reached=exact)
+    assert not any(m.retimed_from == 1.0 for m in judged)
+    assert motion.k == 1.25 and motion.retimed_from is None  # solved slowed, as any other motion
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,10 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
 
 1. **time**: human frame i (at the human's rate f_h) is robot frame ``u_i = i * k * f_r / f_h``
    (k: the tempo factor the retargeter chose, ``meta["tempo"]``; f_r: the robot motion's rate);
-   the robot's keypoints are interpolated there (natural cubic spline, as the tempo stretch
-   itself does), its contact labels taken at the nearest frame;
+   the robot's poses are interpolated there in joint space (natural cubic spline, as the tempo
+   stretch itself does: :func:`~motion2robot.retarget.retime.sample_poses`), so every frame of
+   ``human'`` is a pose the robot takes (robot-shaped, :mod:`~motion2robot.retarget.reach`, at
+   any tempo), its keypoints taken from them and its contact labels at the nearest frame;
 2. **scale**: the robot's keypoints are the targets the retargeter would have had for a human
    whose pelvis path is scaled by ``legs`` and each bone by its group's ratio
    (:func:`~motion2robot.retarget.scale.scaled_keypoints`, ratios from ``meta["scale"]``). That
@@ -230,17 +232,24 @@ def _aim(motion: RobotMotion, robot: Robot, options: Any):
 
 def _reached(direct: HumanMotion, motion: RobotMotion, robot: Robot, options: Any) -> float | None:
     """Hinge RMS (rad) between ``motion`` and the exact poses of ``direct`` (the robot's own
-    keypoints mapped back: robot-shaped when it keeps the robot's frames, at x1.0), or None when
-    the retargeting does not reach ``direct`` exactly (a slowed motion's frames fall between the
-    human's; ``reach`` off; another rate)."""
+    poses mapped back: robot-shaped when it keeps the robot's frames), played at ``motion``'s
+    tempo (:mod:`~motion2robot.retarget.retime`: as the policy plays them), or None when the
+    retargeting does not reach ``direct`` exactly (``reach`` off; another rate; a slowed motion
+    retargeted at a fixed tempo or legs, which stretches the keypoints and solves them)."""
     from motion2robot.retarget.api import RetargetOptions
     from motion2robot.retarget.exact import exact_motion
+    from motion2robot.retarget.retime import retime
 
     opt = options or RetargetOptions()
-    if float(motion.meta.get("tempo") or 1.0) != 1.0 or (opt.fps is not None and abs(opt.fps - direct.fps) > 1e-9):
+    tempo = float(motion.meta.get("tempo") or 1.0)
+    if opt.fps is not None and abs(opt.fps - direct.fps) > 1e-9:
         return None
+    if tempo != 1.0 and not (opt.tempo == "auto" and opt.legs == "auto"):
+        return None  # a fixed tempo stretches the keypoints and solves: only the policy plays poses slower
     exact = exact_motion(direct, robot, opt)
-    return None if exact is None else hinge_rms(exact, motion)
+    if exact is None:
+        return None
+    return hinge_rms(exact if tempo == 1.0 else retime(exact, robot, tempo, direct.num_frames), motion)
 
 
 def project(motion: Any, robot: str | Robot = "op3", *, options: Any = None, check_options: Any = None,

@@ -10,8 +10,8 @@ import numpy as np
 
 from motion2robot.errors import UserError
 from motion2robot.motion.human import KP, SMPL22, HumanMotion
-from motion2robot.motion.ops import spline
 from motion2robot.projection.maths import fill_torso, robot_frames, unscale
+from motion2robot.retarget.retime import sample_poses
 from motion2robot.retarget.scale import Scale
 from motion2robot.robot.poses import frame_poses
 from motion2robot.robot.robot import Robot
@@ -49,12 +49,12 @@ def project_motion(motion: RobotMotion, robot: Robot, original: HumanMotion) -> 
     """``human'``: the robot motion mapped back onto the human skeleton at ``original``'s scale,
     tempo, frame count and rate (see the module text). ``motion`` must have been retargeted from
     ``original`` (its meta carries the scale, the tempo and the contacts used)."""
-    pts, mapped, up = robot_points(motion, robot)
-    if not mapped[KP["pelvis"]]:
-        raise UserError(f"{robot.name} has no pelvis keypoint: the projection rebuilds the skeleton from the pelvis")
     tempo = float(motion.meta.get("tempo") or 1.0)
     u = robot_frames(original.num_frames, original.fps, motion.fps, tempo, motion.num_frames)
-    pts, up = spline(pts, u), spline(up, u)
+    # the robot's poses at the human's frames (joint space): each frame of human' one the robot takes
+    pts, mapped, up = robot_points(motion.with_(qpos=sample_poses(motion.qpos, u, robot.lower, robot.upper)), robot)
+    if not mapped[KP["pelvis"]]:
+        raise UserError(f"{robot.name} has no pelvis keypoint: the projection rebuilds the skeleton from the pelvis")
     scale = _scale_of(motion)
     orig = np.asarray(original.positions)
     first = unscale(pts, mapped, scale, orig)  # the mapped joints do not depend on the fill's values

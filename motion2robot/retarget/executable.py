@@ -6,7 +6,8 @@ attempt that passes, in this order:
 
 0. a robot-shaped motion (the robot's own motion in the human's space, as ``project`` makes:
    :mod:`~.reach`) its exact poses, as its whole body at x1.0, whatever the legs policy would try
-   first for it;
+   first for it; failing there on a check a tempo changes, the same poses played slower
+   (:func:`~.replay.retimed`), the first of the slower factors that passes;
 1. whole body at the generated tempo (x1.0), unless a lift-off of the human's leaves the whole
    body's static balance too little double support to shift its weight even at the slowest
    tempo allowed (:mod:`~.weight_shift`: then it is not tried, and the fallback says why);
@@ -37,14 +38,16 @@ attempt that passes, in this order:
    the whole body: a flat-footed robot of servos cannot make the take-off impulse; ``steps`` walks
    them with a foot always on the floor.
 
-A slowed pass is **replayed** at the generated tempo before it is kept: its own keypoints, mapped back
-into the human's space at the human's tempo (the way back of :mod:`~motion2robot.projection`),
-are retargeted in its legs mode at x1.0 and judged; when that passes it is chosen instead
-(``meta["replayed"]`` says from which tempo). The slow pass did what the human's raw motion
-could not at x1.0 (its feet planned, its poses made followable at a pace that allows it); at the
-human's pace those poses are often still within the robot's reach (2 of 8 slowed dev clips
-keep x1.0 this way), and a robot motion whose poses are the robot's own is what projection
-makes of it, so ``project`` is then exact (:mod:`~.reach`) rather than approximate.
+A slowed pass is **replayed** nearer the generated tempo before it is kept (:mod:`~.replay`):
+its own keypoints, mapped back into the human's space at the human's tempo (the way back of
+:mod:`~motion2robot.projection`), are retargeted in its legs mode at x1.0 and judged; when that
+fails, its poses are played at each faster factor in turn (:mod:`~.retime`, nothing solved
+again), and the first that passes is chosen instead (``meta["replayed"]`` / ``meta["retimed"]``
+say from which tempo). The slow pass did what the human's raw motion could not at x1.0 (its
+feet planned, its poses made followable at a pace that allows it); at the human's pace those
+poses are often still within the robot's reach (2 of 8 slowed dev clips keep x1.0 this way).
+Either way the motion kept is one whose retargeting from ``project``'s ``human'`` is exact (its
+poses at x1.0, or its poses played at the tempo chosen: stage 0).
 
 Nothing is silent: the result's meta says the tempo factor (``tempo``, 1.0 = as generated), why
 (``tempo_reason``), the alternative taken (``fallback``: None, or {"mode", "why"}) and whether the
@@ -55,16 +58,17 @@ chosen attempt passed (``executable``). When no attempt passes, the one failing 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
 from motion2robot.motion.human import HumanMotion
+from motion2robot.retarget.attempt import TEMPO_PROOF, Attempt, tempo_proof
 from motion2robot.retarget.contacts import contact_labels
 from motion2robot.retarget.footholds import PatternError
 from motion2robot.retarget.judged import needs_full_check
 from motion2robot.retarget.nearness import compare, nearness_words, steps_nearer
 from motion2robot.retarget.options import LEG_MODES
+from motion2robot.retarget.replay import replayed, retimed
 from motion2robot.retarget.stance import has_flight
 from motion2robot.retarget.tempo import auto_factors, similar_factor, stretch
 from motion2robot.retarget.weight_shift import short_shifts
@@ -88,37 +92,6 @@ TRAVEL_M = 0.5
 GLIDE_SHARE = 0.1
 
 _MODE_WORDS = {"whole": "the whole body", "steps": "steps", "stance": "the stance"}
-
-#: Checks a slower tempo cannot make pass (the same postures, only slower): an attempt failing any
-#: of them is not tried slower.
-TEMPO_PROOF = frozenset({"joint_limits", "self_collision", "ground"})
-
-
-@dataclass(frozen=True)
-class Attempt:
-    legs: str
-    factor: float
-    motion: RobotMotion
-    report: object | None  # FeasibilityReport, or None when not judged
-    replay_of: float | None = None  # the slowed tempo factor this x1.0 attempt replays
-
-    @property
-    def feasible(self) -> bool:
-        return bool(self.report is not None and self.report.feasible)
-
-    def failed(self) -> list[str]:
-        if self.report is None:
-            return []
-        return [n for n, c in self.report.checks.items() if c.get("ok") is False]
-
-
-def tempo_proof(motion: RobotMotion) -> frozenset:
-    """The checks a slower tempo cannot make ``motion`` pass: :data:`TEMPO_PROOF`, without
-    ``ground`` when its foot plan left swings free for being too fast at this tempo (slower, they
-    are planned: lifted, the stance foot held)."""
-    feet = (motion.meta.get("solver") or {}).get("feet") or {}
-    return TEMPO_PROOF - {"ground"} if feet.get("free_swings_too_fast") else TEMPO_PROOF
-
 
 def _judge(robot: Robot, options: object | None, full: bool = False) -> Callable[[RobotMotion], object]:
     """``check`` with ``options`` (default: every check); unless ``full``, the physics playback
@@ -175,16 +148,16 @@ def _search(make: Callable[[float], Attempt], factors: list[float],
     return last, tried
 
 
-def _replayed(slowed: Attempt, replay: Callable[[RobotMotion], HumanMotion], solve: Solve,
-              judge: Callable[[RobotMotion], object]) -> Attempt | None:
-    """The ``slowed`` attempt replayed at x1.0 (see the module text): ``replay(motion)`` its
-    keypoints in the human's space at the human's tempo, retargeted in its legs mode and judged;
-    None when its legs give no pattern there."""
-    try:
-        motion = solve(replay(slowed.motion), slowed.legs)
-    except PatternError:
-        return None
-    return Attempt(slowed.legs, 1.0, motion, judge(motion), replay_of=slowed.factor)
+def _retime_reason(final: Attempt, tried: list[Attempt]) -> str:
+    """meta["tempo_reason"] of a chosen retimed attempt (:func:`~.replay.retimed`)."""
+    first = next(a for a in tried if a.legs == final.legs)
+    at = "played at the generated tempo (x1.00)" if final.factor == 1.0 else f"slowed x{final.factor:.2f}"
+    if final.retime_of == 1.0:  # a robot-shaped motion's exact poses, slower
+        return (f"{at}: the exact poses of this robot-shaped motion, played x{final.factor:.2f} slower, the smallest "
+                f"slow-down tried that passes (at x1.00 {_words(first.failed())} failed)")
+    return (f"{at}: the robot's motion slowed x{final.retime_of:.2f} (the smallest slow-down of the human's that passes) "
+            f"played at x{final.factor:.2f}, its poses unchanged, passes (the human's at x{first.factor:.2f}: "
+            f"{_words(first.failed())} failed)")
 
 
 def _words(failed: list[str]) -> str:
@@ -307,6 +280,9 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         made[("whole", 1.0)] = reached
         tried.append(attempt("whole", 1.0))
         chosen = tried[0] if tried[0].feasible else None
+        if chosen is None and tempo == "auto" and not set(tried[0].failed()) & tempo_proof(reached):
+            chosen, runs = retimed(tried[0], factors[1:], robot, human.num_frames, judge)  # played slower
+            tried += runs
     i = 0
     while chosen is None and i < len(queue):
         mode, tempos = queue[i]
@@ -352,19 +328,24 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
         if ok is not None:
             chosen = ok
             break
-    if chosen is not None and chosen.factor > 1.0 and tempo == "auto" and replay is not None:
-        again = _replayed(chosen, replay, solve, judge)
-        if again is not None:
-            tried.append(again)
-            chosen = again if again.feasible else chosen
     # nothing passes: the attempt failing the fewest checks (the later one on a tie: slower, and
     # the stance after the steps, as a user would rather have it)
-    final = chosen or min(reversed(tried), key=lambda a: len(a.failed()))
+    nearest = chosen or min(reversed(tried), key=lambda a: len(a.failed()))
+    if nearest.factor > 1.0 and nearest.retime_of is None and tempo == "auto" and replay is not None:
+        # slowed (a pass, or the nearest to one): re-solved at x1.0, else a pass's poses played faster
+        again = replayed(nearest, replay, solve, judge)
+        if again is not None:
+            tried.append(again)
+        if again is not None and again.feasible:
+            chosen = again
+        elif chosen is not None:
+            faster, runs = retimed(chosen, [k for k in factors if k < chosen.factor], robot, human.num_frames, judge)
+            tried += runs
+            chosen = faster or chosen
+    final = chosen or nearest
     meta: dict = {"tempo": float(final.factor), "tempo_policy": str(tempo), "legs_policy": legs,
                   "executable": None if final.report is None else final.feasible,
-                  "attempts": [{"legs": a.legs, "tempo": a.factor, "feasible": a.feasible if a.report else None,
-                                "failed": a.failed(), **({"replay_of": a.replay_of} if a.replay_of else {})}
-                               for a in tried]}
+                  "attempts": [a.record() for a in tried]}
     if skipped:
         meta["legs_skipped"] = skipped
     if nearness:
@@ -377,9 +358,14 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
                                 f"({final.legs} legs) {_words(final.failed())} still fail")
     elif final.replay_of:
         meta["replayed"] = {"from_tempo": final.replay_of}
+        slowed = next(a for a in tried if a.factor == final.replay_of and a.legs == final.legs and not a.replay_of)
+        why = ("the smallest slow-down that passes" if slowed.feasible
+               else f"the nearest to passing, failing {_words(slowed.failed())}")
         meta["tempo_reason"] = (f"played at the generated tempo (x1.00): the robot's motion slowed x{final.replay_of:.2f} "
-                                "(the smallest slow-down that passes), replayed at the generated tempo and retargeted "
-                                "again, passes the checks")
+                                f"({why}), replayed at the generated tempo and retargeted again, passes the checks")
+    elif final.retime_of is not None:
+        meta["retimed"] = {"from_tempo": final.retime_of}
+        meta["tempo_reason"] = _retime_reason(final, tried)
     elif final.factor == 1.0:
         meta["tempo_reason"] = "played at the generated tempo (x1.00): it passes the checks as generated"
     else:
