@@ -8,8 +8,6 @@ import functools
 import numpy as np
 import pytest
 
-from motion2robot.cli.cmd_demo import demo_motion_path
-from motion2robot.motion import read_motion
 from motion2robot.motion.human import SMPL22
 from motion2robot.projection import hinge_rms, project_motion
 from motion2robot.retarget import RetargetOptions, retarget, retarget_and_check
@@ -17,22 +15,18 @@ from motion2robot.retarget.api import whole_body
 from motion2robot.retarget.exact import exact_motion
 from motion2robot.retarget.reach import LIMIT_SLACK, TOLERANCE_M, rigid_bones, robot_scale, robot_shaped
 from motion2robot.robot_motion import RobotMotion
+from tests._demo import demo_clip, op3
 
 FIXED = RetargetOptions(tempo=1.0, legs="whole")
 
 
-@functools.lru_cache(maxsize=1)
-def _robot():
-    from motion2robot.robot import load_robot
-
-    return load_robot("op3")
+_robot = op3
 
 
 @functools.lru_cache(maxsize=1)
 def _demo():
     """The bundled demo clip (first 60 frames), its whole-body robot motion and that motion mapped back."""
-    human = read_motion(demo_motion_path())[0]
-    human = human.with_(positions=human.positions[:60], contacts=None if human.contacts is None else human.contacts[:60])
+    human = demo_clip(60)
     motion = retarget(human, _robot(), FIXED)
     return human, motion, project_motion(motion, _robot(), human)
 

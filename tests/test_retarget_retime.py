@@ -8,28 +8,23 @@ import functools
 import numpy as np
 import pytest
 
-from motion2robot.cli.cmd_demo import demo_motion_path
 from motion2robot.motion import read_motion
 from motion2robot.projection import hinge_rms, project
 from motion2robot.retarget import RetargetOptions, retarget, retarget_and_check
 from motion2robot.retarget.remake import remake
 from motion2robot.retarget.retime import resample_meta, retime, sample_poses
 from motion2robot.retarget.tempo import stretch
+from tests._demo import demo_clip, op3
 from tests._shared import MOTIONS, requires_shared
 
 
-@functools.lru_cache(maxsize=1)
-def _robot():
-    from motion2robot.robot import load_robot
-
-    return load_robot("op3")
+_robot = op3
 
 
 @functools.lru_cache(maxsize=1)
 def _demo():
     """The bundled demo clip (first 80 frames) and its whole-body robot motion at x1.6."""
-    human = read_motion(demo_motion_path())[0]
-    human = human.with_(positions=human.positions[:80], contacts=None if human.contacts is None else human.contacts[:80])
+    human = demo_clip(80)
     return human, retarget(human, _robot(), RetargetOptions(tempo=1.6, legs="whole"))
 
 
