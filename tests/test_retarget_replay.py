@@ -52,7 +52,10 @@ def _plan(monkeypatch, fails, cap: float = 1.25, reached: _Motion | None = None)
     monkeypatch.setattr(ex, "short_shifts", lambda *a: None)
     monkeypatch.setattr(ex, "_judge", lambda robot, options, full=False: judge)
     monkeypatch.setattr(rp, "retime", lambda m, robot, k, n, made_at=None: _Motion(m.legs, k, False, made_at or 1.0))
-    replay = lambda m: human.with_(meta={"replay": True})  # noqa: E731
+    def replay(m):
+        assert m.meta["tempo"] == m.k  # mapped back at the tempo it was made at (the human's frame i is its i * k)
+        return human.with_(meta={"replay": True})
+
     motion, _ = ex.plan(human, None, "auto", "auto", cap, solve, reached=reached, replay=replay)
     return motion, judged
 
@@ -123,17 +126,40 @@ def op3():
 
 
 @requires_shared
-def test_a_slow_walk_replayed_keeps_its_tempo_and_projects_exactly(op3):
-    """Xia's neutral walk needs x1.25 as retargeted from the capture; its slowed steps replayed
-    at x1.0 pass every check (physics included), so the clip keeps its tempo, and its projection
-    is the robot's own motion, retargeted back to it exactly."""
+def test_a_slow_walk_played_faster_keeps_its_tempo_and_projects_exactly(op3):
+    """Xia's neutral walk needs x1.25 as retargeted from the capture; its slowed steps re-solved at
+    x1.0 fail, but their poses played at x1.0 pass every check (physics included), so the clip
+    keeps its tempo, and its projection is the robot's own motion, retargeted back to it exactly."""
     human = read_motion(MOTIONS / "bvh" / "xia_neutral_01_000.bvh")[0]
     motion, report = retarget_and_check(human, op3)
-    assert motion.meta["tempo"] == 1.0 and motion.meta["replayed"] == {"from_tempo": 1.25}
+    assert motion.meta["tempo"] == 1.0 and motion.meta["retimed"] == {"from_tempo": 1.25}
+    assert [a.get("replay_of") for a in motion.meta["attempts"]][-2] == 1.25  # the re-solve, tried first
     assert report.feasible and motion.num_frames == human.num_frames
+    assert "played at x1.00, its poses unchanged, passes" in motion.meta["tempo_reason"]
     kept, _ = retarget_and_check(human, op3, RetargetOptions(replay=False))
-    assert kept.meta["tempo"] == 1.25 and "replayed" not in kept.meta
+    assert kept.meta["tempo"] == 1.25 and "replayed" not in kept.meta and "retimed" not in kept.meta
     p = project(human, op3)
     assert p.reached and p.executable
     again, again_report = retarget_and_check(p.human, op3)
     assert again_report.feasible and hinge_rms(motion, again) < 1e-6
+
+
+@requires_shared
+def test_a_dance_replayed_moves_as_the_slowed_pass_did(op3):
+    """The CMU dance passes at x1.25; its keypoints mapped back at that tempo (human frame i = robot
+    frame 1.25 i) and re-solved at x1.0 pass: the replay travels as the slow pass does and is as
+    near to the human (keypoint error, robot scale: measured 152.0 / 150.7 mm, the posture 85.8 /
+    84.0 mm). Mapped back at x1.0 instead, a replay was the first 80 % of the slow pass: a Xia
+    walk's stood still (its joints within 0.012 rad) and passed."""
+    from motion2robot.retarget.nearness import keypoint_error
+    from motion2robot.retarget.tempo import stretch
+
+    human = read_motion(MOTIONS / "bvh" / "cmu_cc_005_02_dance.bvh")[0]
+    motion, report = retarget_and_check(human, op3)
+    slowed, _ = retarget_and_check(human, op3, RetargetOptions(replay=False))
+    assert report.feasible and motion.meta["replayed"] == {"from_tempo": 1.25} and slowed.meta["tempo"] == 1.25
+    travel = np.linalg.norm(motion.qpos[-1, :2] - motion.qpos[0, :2])
+    assert travel > 0.05 and travel == pytest.approx(np.linalg.norm(slowed.qpos[-1, :2] - slowed.qpos[0, :2]), abs=0.01)
+    for pose in (False, True):
+        near = keypoint_error(motion, human, op3, pose=pose)
+        assert near < keypoint_error(slowed, stretch(human, 1.25), op3, pose=pose) + 0.005

@@ -30,7 +30,13 @@ The way back (:func:`project_motion`, pure apart from MuJoCo's forward kinematic
    ``human'`` says where the robot's soles were planted (a ``steps`` result's: the schedule its
    walking pattern walked, ``meta["schedule"]``, in which a foot the clip starts or ends in the
    air is in the air, as in the human's, though the robot stands it at its nearest placement);
-5. **target correction** (:func:`refine`): the retargeter's optimum for targets it can reach
+5. **exactly reached**: every frame of the direct mapping is a pose of the robot's, so the default
+   retargeting (tempo and legs ``auto``) reaches it exactly (:mod:`~motion2robot.retarget.reach`)
+   and, for a slowed result, plays those poses at the tempo chosen
+   (:mod:`~motion2robot.retarget.replay`): when that is the robot motion to ``tolerance``,
+   ``human'`` is the direct mapping (:attr:`Projection.reached`; every dev clip, 66 of 66) and
+   nothing below runs. Otherwise (a fixed tempo or legs, another rate, ``reach`` off):
+6. **target correction** (:func:`refine`): the retargeter's optimum for targets it can reach
    exactly is not exactly the pose that reaches them (its regularisation, temporal and
    orientation terms pull it away, a few mm at the robot's scale), and the scale it computes from
    ``human'``'s own bone lengths differs slightly from the original's (a robot's leg keypoints

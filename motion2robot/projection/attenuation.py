@@ -1,5 +1,5 @@
 """How much of a change of its targets the retargeter passes on, and the inverse of that: the
-preconditioner of the target correction (step 5 of :mod:`motion2robot.projection`).
+preconditioner of the target correction (step 6 of :mod:`motion2robot.projection`).
 
 The whole-body solve (:mod:`~motion2robot.retarget.solver`) makes a few block-Jacobi
 Levenberg-Marquardt iterations per stage (``RetargetOptions.iterations``: the free-feet stage,

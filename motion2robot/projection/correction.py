@@ -1,4 +1,4 @@
-"""The target correction (step 5 of :mod:`motion2robot.projection`): ``human'`` moved until its
+"""The target correction (step 6 of :mod:`motion2robot.projection`): ``human'`` moved until its
 retargeting is the robot motion it was made from."""
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def refine(direct: HumanMotion, motion: RobotMotion, robot: Robot, solve: Callab
            rounds: int = ROUNDS, tolerance: float = TOLERANCE, memory: int = MEMORY,
            aim: Callable[[RobotMotion, float], RobotMotion] | None = None,
            reference: HumanMotion | None = None) -> tuple[HumanMotion, tuple[float, ...]]:
-    """The target correction (step 5 of the module text): starting from ``direct`` (= P(motion)),
+    """The target correction (step 6 of the projection module text): starting from ``direct`` (= P(motion)),
     solve the fixed point ``P(solve(h)) = P(motion)`` for ``h`` by Anderson-accelerated rounds of
     ``h <- h + (P(aim(q, mu)) - P(q))``, q = ``solve(h)`` (:func:`anderson_step`, the last
     ``memory`` rounds) until ``solve(h)`` is within ``tolerance`` rad RMS of ``motion`` or the

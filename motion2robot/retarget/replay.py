@@ -31,7 +31,7 @@ def replayed(slowed: Attempt, replay: Callable[[RobotMotion], HumanMotion],
     """The ``slowed`` attempt replayed at x1.0 (see the module text); None when its legs give no
     pattern there."""
     try:
-        motion = solve(replay(slowed.motion), slowed.legs)
+        motion = solve(replay(slowed.motion.with_(meta={"tempo": slowed.factor})), slowed.legs)  # (meta has no tempo yet)
     except PatternError:
         return None
     return Attempt(slowed.legs, 1.0, motion, judge(motion), replay_of=slowed.factor)
