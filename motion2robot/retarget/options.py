@@ -48,9 +48,10 @@ class RetargetOptions:
     and of the other foot); off = soles pinned in contact frames only, free otherwise.
     reach: a robot-shaped human motion (every keypoint reachable exactly in one pose a frame, as
     ``project`` makes) is retargeted to exactly those poses (:mod:`~motion2robot.retarget.reach`;
-    off = solved like any other). replay: with tempo "auto", a slowed pass is replayed at the
-    generated tempo (its keypoints in the human's space, retargeted again) and kept at x1.0 when
-    that passes (:mod:`~motion2robot.retarget.executable`); off = the slowed pass is kept."""
+    off = solved like any other). replay: with tempo "auto", a slowed attempt (a pass, or the nearest to one) is replayed
+    at the generated tempo (its keypoints in the human's space, retargeted again) and kept at x1.0
+    when that passes, else a pass's poses are played at each faster tempo and the first that passes
+    kept (:mod:`~motion2robot.retarget.replay`); off = the slowed attempt is kept."""
 
     balance: bool = True
     fps: float | None = None
