@@ -51,7 +51,7 @@ def _plan(monkeypatch, fails, cap: float = 1.25, reached: _Motion | None = None)
 
     monkeypatch.setattr(ex, "short_shifts", lambda *a: None)
     monkeypatch.setattr(ex, "_judge", lambda robot, options, full=False: judge)
-    monkeypatch.setattr(rp, "retime", lambda m, robot, k, n, made_at=None: _Motion(m.legs, k, False, made_at or 1.0))
+    monkeypatch.setattr(rp, "retime", lambda m, robot, k, n: _Motion(m.legs, k, False, m.meta.get("tempo", 1.0)))
     def replay(m):
         assert m.meta["tempo"] == m.k  # mapped back at the tempo it was made at (the human's frame i is its i * k)
         return human.with_(meta={"replay": True})

@@ -262,6 +262,7 @@ def plan(human: HumanMotion, robot: Robot, tempo: str | float, legs: str, cap: f
     def attempt(mode: str, k: float) -> Attempt:
         if (mode, k) not in judged:
             motion = made.pop((mode, k)) if (mode, k) in made else solve(at(k), mode)
+            motion = motion.with_(meta={"tempo": k})  # what a replay reads it was made at
             judged[(mode, k)] = Attempt(mode, k, motion, judge(motion))
         return judged[(mode, k)]
 

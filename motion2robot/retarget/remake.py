@@ -54,7 +54,7 @@ def remake(human: HumanMotion, robot: Robot, motion: RobotMotion, options: Retar
         return solve_legs(project_motion(solved(replayed), robot, human), robot, inner, legs)
     if retimed is not None:
         base = exact_or_solved() if retimed == 1.0 and meta.get("reached") else solved(retimed)
-        return retime(base, robot, tempo, human.num_frames, made_at=retimed)
+        return retime(base, robot, tempo, human.num_frames)
     if meta.get("reached"):
         return exact_or_solved()
     return solved(tempo)

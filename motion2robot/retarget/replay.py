@@ -31,7 +31,7 @@ def replayed(slowed: Attempt, replay: Callable[[RobotMotion], HumanMotion],
     """The ``slowed`` attempt replayed at x1.0 (see the module text); None when its legs give no
     pattern there."""
     try:
-        motion = solve(replay(slowed.motion.with_(meta={"tempo": slowed.factor})), slowed.legs)  # (meta has no tempo yet)
+        motion = solve(replay(slowed.motion), slowed.legs)
     except PatternError:
         return None
     return Attempt(slowed.legs, 1.0, motion, judge(motion), replay_of=slowed.factor)
@@ -44,7 +44,7 @@ def retimed(base: Attempt, factors: list[float], robot: Robot, human_frames: int
     no tempo changes (:func:`~.attempt.tempo_proof`)."""
     tried: list[Attempt] = []
     for k in factors:
-        motion = retime(base.motion, robot, k, human_frames, made_at=base.factor)  # (meta has no tempo yet)
+        motion = retime(base.motion, robot, k, human_frames)
         a = Attempt(base.legs, k, motion, judge(motion), retime_of=base.factor)
         tried.append(a)
         if a.feasible:

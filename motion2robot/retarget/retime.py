@@ -70,12 +70,11 @@ def resample_meta(meta: Mapping[str, Any], u: np.ndarray, n: int, top: bool = Tr
     return out
 
 
-def retime(motion: RobotMotion, robot: Robot, tempo: float, human_frames: int,
-           made_at: float | None = None) -> RobotMotion:
-    """``motion`` (made at tempo factor ``made_at``, default its ``meta["tempo"]`` or 1, from a
-    human motion of ``human_frames`` frames) played at tempo factor ``tempo`` (see the module
-    text); ``meta["tempo"]`` is then ``tempo`` and ``meta["retimed"]`` says from which."""
-    k = float(made_at if made_at is not None else motion.meta.get("tempo") or 1.0)
+def retime(motion: RobotMotion, robot: Robot, tempo: float, human_frames: int) -> RobotMotion:
+    """``motion`` (made at tempo factor ``meta["tempo"]``, default 1, from a human motion of
+    ``human_frames`` frames) played at tempo factor ``tempo`` (see the module text);
+    ``meta["tempo"]`` is then ``tempo`` and ``meta["retimed"]`` says from which."""
+    k = float(motion.meta.get("tempo") or 1.0)
     n = max(2, int(round((human_frames - 1) * tempo)) + 1)
     u = np.minimum(np.arange(n) * (k / tempo), motion.num_frames - 1)
     qpos = sample_poses(motion.qpos, u, robot.lower, robot.upper)
