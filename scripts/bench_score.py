@@ -1,10 +1,12 @@
 """Throughput of scoring: samples of 196 frames scored per minute, with and without the physics
 rollout, the per-sample overhead of the in-process API vs the CLI, and where the time goes.
 
-    python scripts/bench_score.py [--samples 8] [--jobs 2] [--profile]
+    python scripts/bench_score.py [--samples 64] [--jobs 2] [--profile]
 
 Samples: the real clips of ../shared/motions with at least 196 frames at 20 fps (MDM's 196-frame
-"throw a ball" samples, two HumanML3D clips), cut to 196 frames and repeated up to ``--samples``.
+"throw a ball" samples, two HumanML3D clips), cut to 196 frames and repeated up to ``--samples``
+(64 by default: a rate per minute is a sustained rate, and on a few samples the last worker's
+unfinished clip, up to 0.3 s, weighs on the wall-clock figure).
 Figures per mode: wall-clock samples/min of a warm worker pool (the pool is started and the
 compiled problems loaded by a first call, not timed), and the CPU-time figure (60 / mean worker
 CPU seconds per sample x jobs), which is what the machine could do if the cores were not shared.
@@ -102,7 +104,7 @@ def profile_one(batch: np.ndarray, physics: bool) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--samples", type=int, default=8)
+    ap.add_argument("--samples", type=int, default=64)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--profile", action="store_true")
     args = ap.parse_args()
