@@ -17,7 +17,7 @@ from motion2robot.robot_motion import RobotMotion
 from motion2robot.score.batch_input import to_clips, trailing_zero_frames
 from motion2robot.score.figures import TIMING
 from tests._shared import MOTIONS, requires_shared
-from tests.test_motion_read import _FakeTensor as FakeTensor  # the tests' duck-typed torch tensor
+from tests._tensor import FakeTensor  # the tests' duck-typed torch tensor
 
 
 def _joints() -> np.ndarray:

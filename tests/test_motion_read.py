@@ -13,6 +13,7 @@ from motion2robot.motion import KP, detect_format, from_tensor, read_motion, sub
 from motion2robot.motion.features import decode_positions
 from motion2robot.motion.human import HumanMotion
 from tests._shared import MOTIONS, requires_shared
+from tests._tensor import FakeTensor
 from tests.test_motion_support import walking_yup
 
 # Every file of the development set: expected format, clip count, frames of clip 0 -- or the
@@ -200,31 +201,12 @@ def _save(path: Path, arr: np.ndarray) -> Path:
     return path
 
 
-class _FakeTensor:
-    """Quacks like a torch tensor on a GPU with grad: detach() -> cpu() -> numpy()."""
-
-    def __init__(self, a: np.ndarray):
-        self.a = a
-        self.calls: list[str] = []
-
-    def detach(self) -> "_FakeTensor":
-        self.calls.append("detach")
-        return self
-
-    def cpu(self) -> "_FakeTensor":
-        self.calls.append("cpu")
-        return self
-
-    def numpy(self) -> np.ndarray:
-        return self.a
-
-
 def test_from_tensor_joints_and_mdm_layout(tmp_path: Path) -> None:
     walk = walking_yup(25)
-    t = _FakeTensor(walk)
+    t = FakeTensor(walk)
     m = from_tensor(t, layout="humanml3d_joints")[0]
     assert t.calls == ["detach", "cpu"] and m.num_frames == 25
-    mdm = from_tensor(_FakeTensor(walk.transpose(1, 2, 0)[None]), layout="humanml3d_joints")[0]
+    mdm = from_tensor(FakeTensor(walk.transpose(1, 2, 0)[None]), layout="humanml3d_joints")[0]
     assert np.allclose(mdm.positions, m.positions)
     with pytest.raises(InputFileError, match="unknown layout"):
         from_tensor(t, layout="smpl")
@@ -234,7 +216,7 @@ def test_from_tensor_joints_and_mdm_layout(tmp_path: Path) -> None:
 def test_from_tensor_normalised_features() -> None:
     vecs = MOTIONS / "humanml3d_vecs"
     mean, std, raw = (np.load(vecs / f) for f in ("Mean.npy", "Std.npy", "M010968.npy"))
-    m = from_tensor(_FakeTensor((raw - mean) / std), layout="humanml3d_vecs", mean=mean, std=std)[0]
+    m = from_tensor(FakeTensor((raw - mean) / std), layout="humanml3d_vecs", mean=mean, std=std)[0]
     ref = read_motion(vecs / "M010968.npy")[0]
     assert np.abs(m.positions - ref.positions).max() < 1e-3
 
