@@ -10,22 +10,22 @@ from __future__ import annotations
 
 import json
 import zipfile
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, Mapping
 
 import numpy as np
 
 from motion2robot.errors import InputFileError
 from motion2robot.util.files import UNREADABLE_FIX, special_file, unreadable
+from motion2robot.util.frames import Frames
 from motion2robot.util.jsonable import plain
 
 NPZ_KEYS = ("qpos", "fps", "joint_names", "robot", "meta")
 
 
 @dataclass(frozen=True, eq=False)
-class RobotMotion:
+class RobotMotion(Frames):
     """A joint-space trajectory of one robot.
 
     qpos: (T, 7 + n) float64: root xyz (m), root quaternion wxyz, n hinge angles (rad).
@@ -42,6 +42,8 @@ class RobotMotion:
     robot: str
     meta: Mapping[str, Any] = field(default_factory=dict)
 
+    _frames_field = "qpos"  # not a field (no annotation): the array whose rows are the frames
+
     def __post_init__(self) -> None:
         q = np.array(self.qpos, dtype=np.float64)
         names = tuple(str(n) for n in self.joint_names)
@@ -50,21 +52,7 @@ class RobotMotion:
         q.flags.writeable = False
         object.__setattr__(self, "qpos", q)
         object.__setattr__(self, "joint_names", names)
-        object.__setattr__(self, "fps", float(self.fps))
-        object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
-
-    def __reduce__(self) -> tuple:
-        """Pickle support (worker processes): the fields in order, ``meta`` as a plain dict."""
-        return type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
-                                 for v in (getattr(self, f.name) for f in fields(self)))
-
-    @property
-    def num_frames(self) -> int:
-        return int(self.qpos.shape[0])
-
-    @property
-    def duration(self) -> float:
-        return self.num_frames / self.fps
+        self._freeze_rate_and_meta()
 
     @property
     def root_pos(self) -> np.ndarray:
@@ -80,11 +68,6 @@ class RobotMotion:
     def joints(self) -> np.ndarray:
         """(T, n) hinge angles, radians, in ``joint_names`` order."""
         return self.qpos[:, 7:]
-
-    def with_(self, **changes: Any) -> "RobotMotion":
-        if "meta" in changes:
-            changes["meta"] = {**self.meta, **changes["meta"]}
-        return replace(self, **changes)
 
     def save(self, path: str | Path) -> Path:
         """Write the ``.npz`` with exactly the keys of :data:`NPZ_KEYS`; returns the path."""

@@ -6,11 +6,12 @@ floor at z = 0**. Keypoints: the 22 SMPL body joints in HumanML3D order (:data:`
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
-from types import MappingProxyType
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
+
+from motion2robot.util.frames import Frames
 
 #: The 22 SMPL body joints in HumanML3D order.
 SMPL22: tuple[str, ...] = (
@@ -25,7 +26,7 @@ KP = {name: i for i, name in enumerate(SMPL22)}
 
 
 @dataclass(frozen=True, eq=False)
-class HumanMotion:
+class HumanMotion(Frames):
     """A human motion clip in the canonical frame.
 
     positions: (T, 22, 3) float64, metres, z up, x forward at frame 0, floor at z = 0.
@@ -38,6 +39,8 @@ class HumanMotion:
     fps: float
     contacts: np.ndarray | None = None
     meta: Mapping[str, Any] = field(default_factory=dict)
+
+    _frames_field = "positions"  # not a field (no annotation): the array whose rows are the frames
 
     def __post_init__(self) -> None:
         pos = np.asarray(self.positions, dtype=np.float64)
@@ -55,29 +58,8 @@ class HumanMotion:
             object.__setattr__(self, "contacts", c)
         if not self.fps > 0:
             raise ValueError(f"fps must be positive, got {self.fps}")
-        object.__setattr__(self, "fps", float(self.fps))
-        object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
-
-    def __reduce__(self) -> tuple:
-        """Pickle support (worker processes): the fields in order, ``meta`` as a plain dict."""
-        return type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
-                                 for v in (getattr(self, f.name) for f in fields(self)))
-
-    @property
-    def num_frames(self) -> int:
-        return int(self.positions.shape[0])
-
-    @property
-    def duration(self) -> float:
-        """Seconds from the first to the last frame plus one frame period."""
-        return self.num_frames / self.fps
+        self._freeze_rate_and_meta()
 
     def joint(self, name: str) -> np.ndarray:
         """(T, 3) trajectory of one SMPL22 keypoint by name."""
         return self.positions[:, KP[name]]
-
-    def with_(self, **changes: Any) -> "HumanMotion":
-        """A copy with some fields replaced (meta is merged, not replaced)."""
-        if "meta" in changes:
-            changes["meta"] = {**self.meta, **changes["meta"]}
-        return replace(self, **changes)
