@@ -57,14 +57,6 @@ def clip():
     return trim(read_motion(MOTIONS / "humanml3d_joints" / "007005.npy")[0], 40, 52)
 
 
-@pytest.fixture
-def menagerie_env(monkeypatch):
-    if MENAGERIE is not None:
-        monkeypatch.setenv("MENAGERIE_ROOT", str(MENAGERIE))
-    load_robot.cache_clear()
-    yield
-    load_robot.cache_clear()
-
 
 def test_every_menagerie_humanoid_is_discovered():
     folders = _menagerie_folders()

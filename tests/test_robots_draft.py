@@ -16,20 +16,13 @@ from motion2robot.robot.describe import compare_robots
 from motion2robot.robot.config import load_config
 from motion2robot.robot.draft import draft_config, write_draft
 from motion2robot.robot.draft_toml import value
-from tests._shared import MENAGERIE, MOTIONS, requires_menagerie, requires_shared
+from tests._shared import MOTIONS, requires_menagerie, requires_shared
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-
-@pytest.fixture
-def menagerie_env(monkeypatch):
-    monkeypatch.setenv("MENAGERIE_ROOT", str(MENAGERIE))
-    load_robot.cache_clear()
-    yield
-    load_robot.cache_clear()
 
 
 def _draft_and_load(model, tmp_path, name="bot"):

@@ -5,17 +5,10 @@ import numpy as np
 import pytest
 
 from motion2robot.robot import load_robot
-from tests._shared import MENAGERIE, requires_menagerie
+from tests._shared import requires_menagerie
 
 pytestmark = requires_menagerie
 
-
-@pytest.fixture
-def menagerie_env(monkeypatch):
-    monkeypatch.setenv("MENAGERIE_ROOT", str(MENAGERIE))
-    load_robot.cache_clear()
-    yield
-    load_robot.cache_clear()
 
 
 def _contacts(robot, qpos):
