@@ -13,8 +13,9 @@ import pytest
 
 from motion2robot import api
 from motion2robot.errors import MotionBatchError, RobotConfigError, UserError
+from motion2robot.motion.checks import trailing_zero_frames
 from motion2robot.robot_motion import RobotMotion
-from motion2robot.score.batch_input import to_clips, trailing_zero_frames
+from motion2robot.score.batch_input import to_clips
 from motion2robot.score.figures import TIMING
 from tests._shared import MOTIONS, requires_shared
 from tests._tensor import FakeTensor  # the tests' duck-typed torch tensor

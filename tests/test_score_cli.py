@@ -130,6 +130,24 @@ def test_nan_sample_is_an_error_row_the_others_are_scored(tmp_path: Path, capsys
     assert "NaN" in bad["error"] and good["error"] is None and good["fidelity"]["keypoint_error_m"] > 0
 
 
+@requires_shared
+def test_padded_batch_file_without_lengths_is_an_error_row_with_them_every_sample_is_scored(tmp_path: Path, capsys) -> None:
+    raw = np.load(MOTIONS / "humanml3d_joints/M010968.npy")[:40]
+    batch = np.stack([raw, raw])
+    batch[1, 30:] = 0.0  # a generator's padding after a 30-frame sample
+    np.save(tmp_path / "padded.npy", batch)
+    code, _, err = _score(capsys, str(tmp_path / "padded.npy"), "--out", str(tmp_path / "o"), *FAST)
+    assert code == 0, err
+    rows = {r["clip"]: r for r in map(json.loads, (tmp_path / "o" / "padded.jsonl").read_text().splitlines())}
+    assert rows[0]["error"] is None and rows[0]["frames"] == 40
+    assert "10 all-zero frames (frames 30-39 of 40)" in rows[1]["error"] and "lengths" in rows[1]["error"]
+    np.savez(tmp_path / "padded.npz", joints=batch, lengths=np.array([40, 30]), fps=20.0)
+    code, _, err = _score(capsys, str(tmp_path / "padded.npz"), "--out", str(tmp_path / "o"), *FAST)
+    assert code == 0, err
+    rows = {r["clip"]: r for r in map(json.loads, (tmp_path / "o" / "padded.jsonl").read_text().splitlines())}
+    assert [rows[i]["error"] for i in (0, 1)] == [None, None] and [rows[i]["frames"] for i in (0, 1)] == [40, 30]
+
+
 def test_unknown_robot_one_line_exit_2(tmp_path: Path) -> None:
     clip = tmp_path / "c.npy"
     np.save(clip, np.zeros((5, 22, 3)))

@@ -21,8 +21,26 @@ def fail(path: str | Path, problem: str, fix: str) -> InputFileError:
     return InputFileError(f"{path}: {problem}; {fix}")
 
 
-def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions") -> None:
-    """Refuse non-finite frames (naming them) and clips shorter than 2 frames.
+def trailing_zero_frames(sample: np.ndarray) -> int:
+    """Number of frames at the end of (T, ...) ``sample`` whose values are all exactly zero (the
+    padding generators put after a shorter sample: no body has every joint at the origin, no
+    feature vector is exactly zero)."""
+    flat = np.asarray(sample).reshape(len(sample), -1)
+    if len(flat) == 0 or np.any(flat[-1] != 0):  # the common case: the last frame alone decides
+        return 0
+    nonzero = np.flatnonzero(np.any(flat != 0, axis=1))
+    return len(flat) if len(nonzero) == 0 else len(flat) - 1 - int(nonzero[-1])
+
+
+#: What to do with a padded sample (the same sentence for every reader).
+PADDING_FIX = ("cut each sample at its length; for a padded batch give the lengths: MDM's results.npy "
+               "(motion, text, lengths), an .npz with joints=(N, T, 22, 3), lengths=(N,) and fps, or "
+               "lengths= in motion2robot.api")
+
+
+def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions", *, padding: bool = True) -> None:
+    """Refuse non-finite frames (naming them), clips shorter than 2 frames and, with ``padding``,
+    trailing all-zero frames (a padded sample read without its length).
 
     positions: (T, ...) array, any trailing shape.
     """
@@ -31,6 +49,12 @@ def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions
         raise fail(path, f"has {t} frame{'s' if t != 1 else ''}, a motion needs at least 2",
                    "export a longer clip")
     if np.isfinite(positions).all():  # the common case: one pass, no per-frame reduction
+        pad = trailing_zero_frames(positions) if padding else 0
+        if pad == t:
+            raise fail(path, f"{what} are all zero in every one of its {t} frames (padding, not a motion)", PADDING_FIX)
+        if pad:
+            raise fail(path, f"{what} end with {pad} all-zero frames (frames {t - pad}-{t - 1} of {t}): padding "
+                             "after a shorter sample, not motion", PADDING_FIX)
         return
     bad = ~np.isfinite(positions.reshape(t, -1)).all(axis=1)
     if bad.any():

@@ -101,7 +101,7 @@ TABLE: tuple[Format, ...] = (
            (".npz",), lambda p: p.is_zip and ({"poses", "trans"} <= p.npz_keys
                                               or {"root_orient", "pose_body"} <= p.npz_keys),
            "motion2robot.motion.read_smpl:read_amass", single_clip=True, options=("body_model", "strict")),
-    Format("npz", ".npz with joints=(T,22,3) and fps", (".npz",),
+    Format("npz", ".npz with joints=(T,22,3) or (N,T,22,3), fps, optional lengths=(N,)", (".npz",),
            lambda p: p.is_zip, f"{_A}:read_npz"),
     Format("aistpp_smpl", "AIST++ SMPL parameters .pkl (or an editor result dict), restricted unpickler",
            (".pkl",), lambda p: p.suffix == ".pkl", "motion2robot.motion.read_smpl:read_smpl_pkl",

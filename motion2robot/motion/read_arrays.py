@@ -93,31 +93,42 @@ def _stats(path: Path, which: str, given: Any, dim: int) -> np.ndarray | None:
     return a.astype(np.float64)
 
 
+def _judged_frames(feat: np.ndarray) -> np.ndarray:
+    """(K, dim) the frames of ``feat`` that say whether it is normalised: finite and not all zero
+    (a NaN sample or a padded one, refused on its own, does not decide for the others)."""
+    flat = feat.reshape(-1, feat.shape[-1])
+    keep = np.isfinite(flat).all(axis=1) & np.any(flat != 0, axis=1)
+    return flat[keep] if keep.any() else flat
+
+
 def denormalise(path: Path, feat: np.ndarray, opts: ReadOptions) -> tuple[np.ndarray, str]:
     """Raw features and a sentence saying what was assumed (raw or normalised, which stats)."""
     dim = feat.shape[-1]
+    judged = _judged_frames(feat)
     mean = _stats(path, "Mean", opts.mean, dim)
     std = _stats(path, "Std", opts.std, dim)
     if (mean is None) != (std is None):
         raise fail(path, "needs both Mean.npy and Std.npy to denormalise", "pass --mean and --std together")
     if mean is not None:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a zero Std entry: inf, not a warning
-            rms = float(np.sqrt(np.mean(((feat - mean) / std) ** 2)))
+            rms = float(np.sqrt(np.mean(((judged - mean) / std) ** 2)))
         if rms < NORMALISED_RMS:
             return feat, f"raw (|x - Mean|/Std has RMS {rms:.2f}; statistics not applied)"
         return feat * std + mean, f"normalised (RMS {rms:.1f} as raw), denormalised with the given/adjacent Mean/Std"
-    if F.looks_raw(feat):
+    if F.looks_raw(judged):
         return feat, "raw (contact channels are exactly 0/1)"
-    height = float(np.median(feat[..., 3]))
-    contacts = feat[..., F.contact_slice(dim)]
+    height = float(np.median(judged[..., 3]))
+    contacts = judged[..., F.contact_slice(dim)]
     if 0.05 < height < 2.5 and contacts.min() > -0.5 and contacts.max() < 1.5:
         return feat, f"raw (root height {height:.2f} m and contact channels in range)"
     raise fail(path, "looks like normalised features (contact channels not 0/1) and no Mean.npy/Std.npy "
                      "beside it", "pass --mean Mean.npy --std Std.npy of the model's data set")
 
 
-def read_features(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanMotion]:
-    """HumanML3D 263-d features (T, 263) or (N, T, 263), raw or normalised."""
+def read_features(path: Path, arr: np.ndarray, opts: ReadOptions,
+                  lengths: np.ndarray | None = None) -> list[HumanMotion]:
+    """HumanML3D 263-d features (T, 263) or (N, T, 263), raw or normalised; ``lengths`` (N,) the
+    valid frames of each sample of a padded batch."""
     if arr.ndim not in (2, 3) or arr.shape[-1] not in F.JOINTS_BY_DIM:
         raise fail(path, f"has shape {arr.shape}, not feature vectors (T, 263)",
                    "give HumanML3D 263-d features, or pass --format")
@@ -125,17 +136,42 @@ def read_features(path: Path, arr: np.ndarray, opts: ReadOptions) -> list[HumanM
         raise fail(path, "holds KIT-ML 251-d features: they decode (21 KIT joints) but the KIT skeleton has "
                          "no SMPL22 name map here", "convert to HumanML3D joints first")
     feat = np.asarray(arr, dtype=np.float64)
-    for f in ([feat] if feat.ndim == 2 else feat):
+    samples = [feat] if feat.ndim == 2 else list(feat)
+    if lengths is not None:
+        samples = [f[:n] for f, n in zip(samples, lengths)]
+    picked = _pick(samples, opts.clip, path)
+    for _, f in picked:  # only the samples asked for: a bad one spoils no other sample's row
         check_frames(path, f, "features")
-    feat, assumed = denormalise(path, feat, opts)
-    clips = [feat] if feat.ndim == 2 else list(feat)
+    # normalised or raw is judged on every sample's valid frames together, applied to each
+    cat, assumed = denormalise(path, np.concatenate(samples), opts)
+    clips = np.split(cat, np.cumsum([len(f) for f in samples])[:-1])
     prompts = prompts_beside(path, len(clips))
     out = []
-    for i, f in _pick(clips, opts.clip, path):
+    for i, _ in picked:
+        f = clips[i]
         out.append(_canon(path, F.decode_positions(f), HUMANML3D_FPS, opts, "humanml3d_vecs", i,
                           contacts=F.decode_contacts(f), contacts_source="263-d contact channels",
                           features=assumed, prompt=prompts[i]))
     return out
+
+
+def frame_counts(path: Path, raw: Any, n: int, t: int, fix: str) -> np.ndarray:
+    """(n,) int64 valid frames of each of the n samples of a (padded) batch of t frames, from a
+    file's ``lengths`` entry; InputFileError (with ``fix``) unless they are n whole numbers in [0, t]."""
+    try:
+        arr = np.asarray(raw)
+        lengths = arr.astype(np.int64).reshape(-1)
+        if arr.dtype.kind not in "iuf" or (arr.dtype.kind == "f" and not np.array_equal(lengths, arr.reshape(-1))):
+            raise ValueError("not whole numbers")
+    except (TypeError, ValueError, OverflowError):
+        raise fail(path, f"'lengths' is {raw!r:.60}, not whole frame counts", fix) from None
+    if lengths.size != n:
+        raise fail(path, f"has {n} motions but {lengths.size} lengths", fix)
+    bad = np.flatnonzero((lengths > t) | (lengths < 0))
+    if bad.size:
+        raise fail(path, f"lengths exceed the motion array ({t} frames) or are negative: samples {bad.tolist()[:8]} "
+                         f"claim {lengths[bad].tolist()[:8]}", fix)
+    return lengths
 
 
 def _mdm_layout(path: Path, motion: np.ndarray) -> np.ndarray:
@@ -163,31 +199,22 @@ def read_mdm_results(path: Path, obj: Any, opts: ReadOptions) -> list[HumanMotio
     motion = obj["motion"]
     if not isinstance(motion, np.ndarray):
         raise fail(path, "'motion' is not an array", "give MDM's results.npy")
+    fix = "re-save the results with one whole frame count (<= T) per motion in 'lengths'"
     if motion.ndim == 4 and motion.shape[1] == 263:
         clips = np.transpose(motion[:, :, 0, :], (0, 2, 1))
-        return read_features(path, clips, opts)
+        lengths = frame_counts(path, obj["lengths"], *clips.shape[:2], fix) if "lengths" in obj else None
+        return read_features(path, clips, opts, lengths)
     clips = _mdm_layout(path, motion)
     n, t = clips.shape[:2]
-    try:
-        raw_lengths = np.asarray(obj.get("lengths", np.full(n, t)))
-        lengths = raw_lengths.astype(np.int64).reshape(-1)
-        if raw_lengths.dtype.kind == "f" and not np.array_equal(lengths, raw_lengths.reshape(-1)):
-            raise ValueError("not whole numbers")
-    except (TypeError, ValueError, OverflowError):
-        raise fail(path, f"'lengths' is {obj.get('lengths')!r:.60}, not whole frame counts",
-                   "re-save the results with integer lengths") from None
+    lengths = frame_counts(path, obj.get("lengths", np.full(n, t)), n, t, fix)
     text = obj.get("text", [None] * n)
     if isinstance(text, (str, bytes)) or not isinstance(text, (list, tuple, np.ndarray)) or \
             not all(x is None or isinstance(x, (str, np.str_)) for x in text):
         raise fail(path, f"'text' is {text!r:.60}, not a list of prompts (strings)",
                    "re-save the results with one prompt string per sample")
-    if lengths.size != n or len(text) != n:
-        raise fail(path, f"has {n} motions but {lengths.size} lengths and {len(text)} prompts",
+    if len(text) != n:
+        raise fail(path, f"has {n} motions but {len(text)} prompts",
                    "re-save the results with matching motion/text/lengths")
-    too_long = np.flatnonzero((lengths > t) | (lengths < 0))
-    if too_long.size:
-        raise fail(path, f"lengths exceed the motion array ({t} frames): samples {too_long.tolist()[:8]} "
-                         f"claim {lengths[too_long].tolist()[:8]}", "re-save the results (lengths <= T)")
     hint = obj.get("hint")
     hint = hint if isinstance(hint, np.ndarray) and hint.ndim == 4 and len(hint) == n else None
     out = []
@@ -208,7 +235,7 @@ def read_npz(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     are detected unless --up/--units are given (no convention is implied by .npz)."""
     from motion2robot.motion.archive import read_npz_members
 
-    members = read_npz_members(path, ("joints", "positions", "fps"))
+    members = read_npz_members(path, ("joints", "positions", "fps", "lengths"))
     key = next((k for k in ("joints", "positions") if k in members), None)
     if key is None:
         raise fail(path, f"has no 'joints' or 'positions' array (keys: {', '.join(members.names) or 'none'})",
@@ -221,6 +248,10 @@ def read_npz(path: Path, opts: ReadOptions) -> list[HumanMotion]:
     if opts.fps is None and fps is None:
         raise fail(path, "has no 'fps' entry", "save fps=... in the .npz or pass --source-fps")
     clips = _joints_clips(path, arr)
+    if "lengths" in members:  # a padded batch: each sample's valid frames
+        lengths = frame_counts(path, members["lengths"], len(clips), len(clips[0]) if clips else 0,
+                               "save lengths=(N,) whole frame counts (<= T), one per sample of joints")
+        clips = [c[:n] for c, n in zip(clips, lengths)]
     return [canonicalize(path, c, opts.fps or fps, up=opts.up, up_source="--up",
                          units=opts.units, units_source="--units", source_fps=fps,
                          meta={"source": str(path), "format": "npz", "clip": i, "key": key})

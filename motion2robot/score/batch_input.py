@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from motion2robot.errors import MotionBatchError, UserError
+from motion2robot.motion.checks import trailing_zero_frames
 from motion2robot.motion.human import HumanMotion
 from motion2robot.motion.tensors import from_tensor, to_numpy
 from motion2robot.util.ranges import frame_ranges
@@ -50,14 +51,6 @@ def _lengths(lengths: Any, batch: int, frames: int) -> np.ndarray:
         raise MotionBatchError(f"lengths[{int(bad[0])}] = {int(arr[bad[0]])} is outside 1..{frames} (the batch has "
                                f"{frames} frames per sample)")
     return arr
-
-
-def trailing_zero_frames(sample: np.ndarray) -> int:
-    """Number of frames at the end of (T, ...) ``sample`` whose values are all exactly zero (the
-    padding generators put after a shorter sample)."""
-    flat = sample.reshape(len(sample), -1)
-    nonzero = np.flatnonzero(np.any(flat != 0, axis=1))
-    return len(flat) if len(nonzero) == 0 else len(flat) - 1 - int(nonzero[-1])
 
 
 def _split(motions: Any, lengths: Any) -> tuple[list[np.ndarray], str]:
