@@ -203,8 +203,9 @@ def test_the_end_hold_sends_no_tick_off_the_schedule(tmp_path):
                         telemetry_path=tmp_path / "t.jsonl", policy=hold)
     tel = read_telemetry(tmp_path / "t.jsonl")
     assert rep.stop_reason == "end" and [t["phase"] for t in tel.ticks].count("hold") >= 2
-    assert min(t["late"] for t in tel.ticks) > -1e-3  # no tick before its deadline
-    assert rep.figures.jitter_max_ms < 0.5 * 50.0 or rep.figures.overruns > 0
+    # no tick before its deadline (what made the jitter figure most of a period); how late a tick
+    # is depends on the machine's load, which a unit test does not judge
+    assert min(t["late"] for t in tel.ticks) > -1e-3
 
 
 def _streaming_process(tmp_path: Path, sig: int) -> tuple[subprocess.Popen, str, str, Path]:
