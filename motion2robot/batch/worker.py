@@ -21,6 +21,7 @@ from typing import Any
 
 from motion2robot import __version__
 from motion2robot.batch.work import WorkItem, one_line
+from motion2robot.util import heap
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,7 @@ def _process(item: WorkItem, body: Any) -> dict[str, Any]:
             f"{w.category.__name__}: {' '.join(str(w.message).split())[:300]}" for w in caught))[:MAX_WARNINGS]
     row["timings"]["total_s"] = round(time.perf_counter() - start, 4)
     row["timings"]["cpu_s"] = round(time.process_time() - cpu, 4)
+    heap.after_clip()  # what the clip freed back to the OS (not timed: it is the worker's, not the clip's)
     row["worker"] = worker_figures()
     return row
 
