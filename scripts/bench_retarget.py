@@ -8,9 +8,9 @@
 3. the per-frame IPOPT baseline of the same costs on a subset, its speed, the ratio, and how
    close its answer is (mean keypoint error of both, mean |dq|);
 4. reachable targets: keypoints from the robot's own FK along random smooth joint trajectories
-   (within limits, lowest sole on the floor), retargeted with unit scale, no contacts/balance,
-   tracking + temporal terms and a faint posture term (IK under joint and velocity limits):
-   mean keypoint error;
+   (within limits, lowest sole on the floor, clear of self-collision), retargeted with unit scale,
+   no contacts/balance, tracking + temporal terms and a faint posture term (IK under joint and
+   velocity limits): mean keypoint error by the solver and by the default (exact reach);
 5. per clip of ../shared/motions that read_motion reads, for each robot: limit violations, worst
    sole depth, % of contact frames with sole speed <= 1 cm/s, worst self-collision depth (MuJoCo
    geoms), max joint speed / limit, CoM-in-shrunk-polygon % (quasi-static clips, balance on;
@@ -178,39 +178,63 @@ def same_problem(robot, human: HumanMotion) -> None:
           f"frame by frame from the previous frame's answer, as IPOPT starts, 50 iterations each: {per_frame(seq).sum():.3f}")
 
 
+def _collision_free(points, q: np.ndarray) -> bool:
+    """Every frame of ``q`` clear of self-collision under the solver's capsules (gaps >= 0)."""
+    gaps = np.asarray(points(q)[3])
+    return gaps.size == 0 or float(gaps.min()) >= 0.0
+
+
 def reachable(robot, seeds: int = 3, T: int = 40, fps: float = 20.0, amplitude: float = 0.15) -> float:
+    """Mean keypoint error (m) of the retargeting of the robot's own keypoints along random smooth
+    joint trajectories that satisfy every hard constraint (joint limits, a sole on the floor, no
+    self-collision under the solver's capsules: a trajectory through the capsules is not reachable,
+    and the joint smoothing's collision pushes rightly move it; such a seed's amplitude is halved
+    until it is clear, up to 4 times). Printed for the solver (the exact reach off) and for the
+    default pipeline (a robot-shaped motion reached pose by pose)."""
     cp = compiled_mod.compiled_problem(robot)
     points = cp.points_eval(T)
-    errs = []
     # IK: tracking terms, a faint posture term and the temporal terms (they pick one solution in
     # the null space of redundant robots, else frames wander apart and the velocity limit bites);
-    # no floor/self-collision terms or corrections (a random trajectory may pass through the
-    # solver's capsules); joint and velocity limits kept
+    # no floor/self-collision terms or corrections; joint and velocity limits kept
     zero = {k: 0.0 for k in ("pelvis_heading", "torso_up", "foot_heading", "sole_flat", "floor", "self_collision")}
     zero["posture"] = POSTURE_REACHABLE
+    errs: dict[bool, list[float]] = {False: [], True: []}
+    used: list[float] = []
     seed = -1
-    while len(errs) < seeds and seed < 30:
+    while len(used) < seeds and seed < 30:
         seed += 1
         rng = np.random.default_rng(seed)
         t = np.arange(T) / fps
         span = robot.upper - robot.lower
         shape = np.sin(2 * np.pi * rng.uniform(0.1, 0.25, robot.n_joints) * t[:, None] + rng.uniform(0, 6.3, robot.n_joints))
-        hinges = np.clip(robot.nominal_qpos[7:] + np.minimum(amplitude * span, MAX_AMPLITUDE) * shape, robot.lower, robot.upper)
-        q = np.tile(robot.nominal_qpos, (T, 1))
-        q[:, 7:] = hinges
+        for halvings in range(5):
+            amp = amplitude / 2 ** halvings
+            hinges = np.clip(robot.nominal_qpos[7:] + np.minimum(amp * span, MAX_AMPLITUDE) * shape, robot.lower, robot.upper)
+            q = np.tile(robot.nominal_qpos, (T, 1))
+            q[:, 7:] = hinges
+            if _collision_free(points, q):
+                break
+        else:
+            continue
         q[:, 2] -= points(q)[1].reshape(T, -1, 3)[..., 2].min(axis=1)
         kp = points(q)[0].reshape(T, -1, 3)
         pos = np.repeat(kp[:, [robot.keypoints.index("pelvis")]], len(SMPL22), axis=1)
         for i, name in enumerate(robot.keypoints):
             pos[:, KP[name]] = kp[:, i]
-        out = retarget(HumanMotion(pos, fps, meta={"source": "fk"}), robot,
-                       RetargetOptions(balance=False, contacts=False, scale=Scale(1.0, 1.0, 1.0),
-                                       weights=Weights(**zero), iterations=(40, 10), corrections=0))
-        errs.append(np.mean(out.meta["solver"]["residual_per_frame"]))
-    err = float(np.mean(errs)) if errs else float("nan")
-    print(f"reachable targets ({robot.name}, {len(errs)} random smooth trajectories x {T} frames, "
-          f"hinges nominal +- min({amplitude:g} x range, {MAX_AMPLITUDE} rad), {seed + 1} drawn): mean keypoint error {1000 * err:.4f} mm")
-    return err
+        used.append(amp)
+        for reach in (False, True):
+            out = retarget(HumanMotion(pos, fps, meta={"source": "fk"}), robot,
+                           RetargetOptions(balance=False, contacts=False, scale=Scale(1.0, 1.0, 1.0), tempo="human",
+                                           legs="whole", reach=reach, weights=Weights(**zero), iterations=(40, 10),
+                                           corrections=0))
+            errs[reach].append(float(np.mean(out.meta["solver"]["residual_per_frame"])))
+    solver = float(np.mean(errs[False])) if used else float("nan")
+    exact = float(np.mean(errs[True])) if used else float("nan")
+    print(f"reachable targets ({robot.name}, {len(used)} random smooth collision-free trajectories x {T} frames, "
+          f"hinges nominal +- min(k x range, {MAX_AMPLITUDE} rad), k = {', '.join(f'{a:g}' for a in used)}, "
+          f"{seed + 1} drawn): mean keypoint error {1000 * solver:.4f} mm by the solver, "
+          f"{1000 * exact:.4f} mm by the default pipeline (exact reach)")
+    return solver
 
 
 def table(robot, items: list[tuple[str, HumanMotion]]) -> None:
