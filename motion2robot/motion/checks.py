@@ -38,9 +38,9 @@ PADDING_FIX = ("cut each sample at its length; for a padded batch give the lengt
                "lengths= in motion2robot.api")
 
 
-def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions", *, padding: bool = True) -> None:
-    """Refuse non-finite frames (naming them), clips shorter than 2 frames and, with ``padding``,
-    trailing all-zero frames (a padded sample read without its length).
+def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions") -> None:
+    """Refuse non-finite frames (naming them), clips shorter than 2 frames and trailing all-zero
+    frames (a padded sample read without its length).
 
     positions: (T, ...) array, any trailing shape.
     """
@@ -49,7 +49,7 @@ def check_frames(path: str | Path, positions: np.ndarray, what: str = "positions
         raise fail(path, f"has {t} frame{'s' if t != 1 else ''}, a motion needs at least 2",
                    "export a longer clip")
     if np.isfinite(positions).all():  # the common case: one pass, no per-frame reduction
-        pad = trailing_zero_frames(positions) if padding else 0
+        pad = trailing_zero_frames(positions)
         if pad == t:
             raise fail(path, f"{what} are all zero in every one of its {t} frames (padding, not a motion)", PADDING_FIX)
         if pad:
